@@ -1,0 +1,13 @@
+"""reflets — real-time rendering of realistic materials and lighting, checked against ground truth.
+
+>>> import reflets
+>>> scene = reflets.load_scene("scene.toml")
+>>> image = reflets.render(scene)            # float32 (H, W, 3), linear radiance
+"""
+
+from .api import compare, render
+from .errors import RefletsError
+from .scene import Scene, load_dict, load_scene
+
+__version__ = "0.1.0"
+__all__ = ["Scene", "load_scene", "load_dict", "render", "compare", "RefletsError", "__version__"]

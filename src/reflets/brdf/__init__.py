@@ -1,0 +1,16 @@
+"""BRDF library: material models (NumPy reference + GLSL twin), selectable by ``type`` in scene files."""
+
+from __future__ import annotations
+
+from typing import Annotated, Union
+
+from pydantic import Field
+
+from .base import MATERIALS, Material, register_material
+from .blinn_phong import BlinnPhong
+from .lambert import Lambert
+
+#: the scene-file form of any registered material, chosen by its ``type`` key
+MaterialSpec = Annotated[Union[Lambert, BlinnPhong], Field(discriminator="type")]  # noqa: UP007
+
+__all__ = ["MATERIALS", "Material", "MaterialSpec", "register_material", "Lambert", "BlinnPhong"]

@@ -1,0 +1,31 @@
+"""Lambertian diffuse reflection, f_r = ρ / π."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+
+from .base import Material, Reflectance, register_material, upper
+
+
+@register_material
+class Lambert(Material):
+    """Ideal diffuse reflector.
+
+    Parameters
+    ----------
+    albedo : [r, g, b], each in [0, 1], default [0.8, 0.8, 0.8]
+        Hemispherical reflectance ρ; f_r = ρ/π.
+    """
+
+    type: Literal["lambert"] = "lambert"
+    albedo: Reflectance = (0.8, 0.8, 0.8)
+    glsl = "reflets/brdf/glsl/lambert.glsl"
+
+    def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        f = np.broadcast_to(np.asarray(self.albedo) / np.pi, np.shape(wo)[:-1] + (3,))
+        return np.where(upper(wo, wi), f, 0.0)
+
+    def uniforms(self) -> dict[str, object]:
+        return {"m_albedo": tuple(self.albedo)}

@@ -1,0 +1,204 @@
+"""The ``reflets`` command: parses arguments, calls the Python API, prints. No rendering logic lives here.
+
+User mistakes (reflets.errors.RefletsError) print one line and exit with status 2; ``--debug`` shows the
+traceback instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from pathlib import Path
+
+from .errors import ArgumentError, RefletsError
+
+EXIT_USER_ERROR = 2
+
+
+def _size(text: str) -> tuple[int, int]:
+    m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", text)
+    if not m:
+        raise ArgumentError(f"'{text}' is not WIDTHxHEIGHT (e.g. 640x480)", field="--size")
+    from .api import check_size
+
+    try:
+        return check_size((int(m.group(1)), int(m.group(2))))
+    except ArgumentError as exc:
+        raise ArgumentError(exc.message, field="--size") from None
+
+
+def _params(items: list[str]) -> dict[str, object]:
+    """``--param key=value`` pairs; values parsed as TOML literals (numbers, booleans, arrays, strings)."""
+    import tomllib
+
+    out: dict[str, object] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ArgumentError(f"'{item}' is not KEY=VALUE", field="--param")
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {value}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = value
+    return out
+
+
+def cmd_render(args) -> int:
+    from .api import as_scene, render
+    from .imageio import IMAGE_WRITE_EXTENSIONS, check_output_path, write_image
+
+    out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".exr")
+    check_output_path(out, IMAGE_WRITE_EXTENSIONS)
+    size = _size(args.size) if args.size else None
+    scene = as_scene(args.scene)
+    image = render(scene, method=args.method, size=size, seed=args.seed, spp=args.spp, **_params(args.param))
+    write_image(out, image, exposure=args.exposure, tonemap=args.tonemap)
+    print(f"wrote {out} ({image.shape[1]}x{image.shape[0]})")
+    return 0
+
+
+def cmd_compare(args) -> int:
+    from .api import compare
+    from .imageio import check_output_path, read_image
+
+    if args.diff:
+        check_output_path(Path(args.diff), (".png",))
+    a, b = read_image(args.test), read_image(args.reference)
+    result = compare(a, b)
+    if args.diff:
+        from .imageio import write_png8
+        from .metrics import difference_image
+
+        write_png8(Path(args.diff), difference_image(a, b))
+    if args.json:
+        print(json.dumps(result))
+    else:
+        for key, value in result.items():
+            print(f"{key:>7}  {value:.6g}")
+    return 0
+
+
+def cmd_info(args) -> int:
+    from importlib import metadata
+
+    from .techniques import TECHNIQUES
+
+    packages = [
+        "reflets",
+        "numpy",
+        "scipy",
+        "moderngl",
+        "glcontext",
+        "pydantic",
+        "trimesh",
+        "OpenEXR",
+        "flip-evaluator",
+        "mitsuba",
+        "opencv-python-headless",
+    ]
+    versions = {}
+    for name in packages:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = None
+    info = {"packages": versions, "methods": sorted(TECHNIQUES)}
+    status = 0
+    try:
+        from .gpu import gl_info
+
+        info["opengl"] = gl_info()
+    except RefletsError as exc:
+        info["opengl"] = {"error": str(exc)}
+        status = EXIT_USER_ERROR
+    if args.json:
+        print(json.dumps(info, indent=2))
+    else:
+        gl = info["opengl"]
+        if "error" in gl:
+            print(f"OpenGL    unavailable: {gl['error']}")
+        else:
+            print(f"OpenGL    {gl['version']} — {gl['renderer']} ({gl['vendor']}), REFLETS_GL={gl['driver_choice']}")
+        print("methods   " + ", ".join(info["methods"]))
+        for name, version in versions.items():
+            print(f"{name:<24}{version or '-'}")
+    return status
+
+
+def cmd_schema(args) -> int:
+    from .scene.schema import scene_json_schema
+
+    print(json.dumps(scene_json_schema(), indent=2))
+    return 0
+
+
+def cmd_demo(args) -> int:
+    from .demo import run_demo
+
+    run_demo(Path(args.output), size=_size(args.size) if args.size else None)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="reflets", description=__doc__.splitlines()[0])
+    parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("render", help="render a scene file to EXR / PNG / NPY / HDR")
+    p.add_argument("scene", help="scene file (.toml)")
+    p.add_argument("-o", "--output", help="output image (.exr, .png, .npy, .hdr); default SCENE_STEM.exr")
+    p.add_argument("--size", help="WIDTHxHEIGHT, overrides the camera's size")
+    p.add_argument("--method", help="technique name (see `reflets info`); default: the scene's, or forward")
+    p.add_argument("--spp", type=int, default=1, help="samples per pixel (default 1)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="technique parameter, repeatable (e.g. --param area_samples=16)",
+    )
+    p.add_argument("--exposure", type=float, default=0.0, help="PNG only: exposure in stops (default 0)")
+    p.add_argument("--tonemap", choices=["srgb", "aces"], default="srgb", help="PNG only: tone curve")
+    p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("compare", help="error metrics of TEST against REFERENCE")
+    p.add_argument("test")
+    p.add_argument("reference")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--diff", metavar="DIFF.png", help="write a false-colour relative-difference image")
+    p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("info", help="OpenGL driver, methods and package versions")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=cmd_info)
+
+    p = sub.add_parser("schema", help="print the JSON schema of scene files")
+    p.set_defaults(func=cmd_schema)
+
+    p = sub.add_parser("demo", help="render the built-in scenes into an HTML gallery")
+    p.add_argument("-o", "--output", default="out/demo", help="output folder (default out/demo)")
+    p.add_argument("--size", help="WIDTHxHEIGHT for every scene (default: each scene's own)")
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except RefletsError as exc:
+        if args.debug:
+            raise
+        print(f"reflets: error: {exc}", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except KeyboardInterrupt:
+        print("reflets: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

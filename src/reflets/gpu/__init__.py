@@ -1,0 +1,17 @@
+"""OpenGL plumbing only: the context, programs with #include, HDR targets, readback, timers."""
+
+from .context import get_context, gl_info, is_software
+from .programs import ProgramSpec, get_program, set_uniforms
+from .targets import HDRTarget
+from .timing import FrameTimer
+
+__all__ = [
+    "get_context",
+    "gl_info",
+    "is_software",
+    "ProgramSpec",
+    "get_program",
+    "set_uniforms",
+    "HDRTarget",
+    "FrameTimer",
+]

@@ -1,0 +1,173 @@
+"""GLSL programs from package files, with ``#include``, declared flags and readable compile errors.
+
+Shader files live in the package and are named by their package path, ``"reflets/gpu/shaders/x.glsl"``.
+Two include forms are understood:
+
+- ``#include "reflets/…"`` — a package file (included once per program, like ``#pragma once``);
+- ``#include NAME`` — a *slot* filled by the caller (e.g. ``BRDF`` → the material's GLSL file).
+
+Each file's text is preceded by ``#line 1 K`` where K numbers the file, so a driver message such as
+``0:12(3): error: …`` (Mesa) or ``0(12) : error C…`` (NVIDIA) is rewritten to ``forward.frag:12: error: …``.
+Flags become ``#define``s right after ``#version``; a flag the program does not declare is an error.
+Compiled programs are cached per (context, stages, slots, flags).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
+
+from ..errors import ShaderError
+
+GLSL_VERSION = "#version 430 core"
+COMMON = "reflets/gpu/shaders/common.glsl"  # constants and frame helpers, in every stage
+_INCLUDE = re.compile(r'^\s*#include\s+(?:"([^"]+)"|([A-Za-z_]\w*))\s*$', re.MULTILINE)
+_MESA_LINE = re.compile(r"(?m)^(\d+):(\d+)\((\d+)\)")
+_NVIDIA_LINE = re.compile(r"(?m)^(\d+)\((\d+)\)")
+
+
+@cache
+def read_source(name: str) -> str:
+    """Text of a package GLSL file named ``reflets/<path inside the package>``."""
+    parts = name.split("/")
+    if parts[0] != "reflets" or len(parts) < 2 or ".." in parts:
+        raise ShaderError(f"include name must look like \"reflets/<path>\", got '{name}'")
+    resource = resources.files("reflets").joinpath(*parts[1:])
+    if not resource.is_file():
+        raise ShaderError(f"shader file not found: {name}")
+    return resource.read_text(encoding="utf-8")
+
+
+@dataclass
+class _Assembler:
+    slots: dict[str, str]
+    files: list[str] = field(default_factory=list)
+    seen: set[str] = field(default_factory=set)
+
+    def expand(self, name: str, parent: str | None = None, line: int = 0) -> str:
+        if name in self.seen:
+            return ""
+        self.seen.add(name)
+        self.files.append(name)
+        index = len(self.files) - 1
+        text = read_source(name)
+        out = [f"#line 1 {index}"]
+        for number, raw in enumerate(text.splitlines(), start=1):
+            m = _INCLUDE.match(raw)
+            if not m:
+                out.append(raw)
+                continue
+            target = m.group(1)
+            if target is None:
+                slot = m.group(2)
+                if slot not in self.slots:
+                    raise ShaderError(
+                        f"{name}:{number}: include slot {slot} is not filled; filled slots: "
+                        f"{', '.join(sorted(self.slots)) or 'none'}"
+                    )
+                target = self.slots[slot]
+            try:
+                out.append(self.expand(target, name, number))
+            except ShaderError as exc:
+                if "not found" in str(exc):
+                    raise ShaderError(f"{name}:{number}: {exc}") from None
+                raise
+            out.append(f"#line {number + 1} {index}")
+        return "\n".join(out)
+
+
+def assemble(name: str, slots: dict[str, str] | None = None, flags: dict[str, object] | None = None):
+    """Full source of one stage and the list of file names indexed by the ``#line`` source numbers.
+
+    Every stage starts with ``#version``, the flags as ``#define``s, then the shared constants file.
+    """
+    defines = []
+    for key, value in sorted((flags or {}).items()):
+        if value is True:
+            defines.append(f"#define {key} 1")
+        elif value is not False and value is not None:
+            defines.append(f"#define {key} {value}")
+    asm = _Assembler(dict(slots or {}))
+    common = asm.expand(COMMON)
+    body = asm.expand(name)
+    return "\n".join([GLSL_VERSION, *defines, common, body, ""]), asm.files
+
+
+def map_log(log: str, files: list[str]) -> str:
+    """Rewrite driver line references (source number, line) into ``file:line``."""
+
+    def short(k: str) -> str:
+        k = int(k)
+        return files[k].split("/")[-1] if 0 <= k < len(files) else f"<source {k}>"
+
+    log = _MESA_LINE.sub(lambda m: f"{short(m.group(1))}:{m.group(2)}", log)
+    log = _NVIDIA_LINE.sub(lambda m: f"{short(m.group(1))}:{m.group(2)}", log)
+    return log
+
+
+@dataclass(frozen=True)
+class ProgramSpec:
+    """A program's stage files and the flags it declares (anything else passed as a flag is an error)."""
+
+    name: str
+    vertex: str | None = None
+    fragment: str | None = None
+    geometry: str | None = None
+    compute: str | None = None
+    flags: frozenset[str] = frozenset()
+
+
+_CACHE: dict[tuple, object] = {}
+
+
+def get_program(ctx, spec: ProgramSpec, *, slots: dict[str, str] | None = None, **flags):
+    """Compile (or fetch from the cache) ``spec`` with include ``slots`` and ``flags`` as ``#define``s."""
+    unknown = sorted(set(flags) - spec.flags)
+    if unknown:
+        raise ShaderError(
+            f"program {spec.name}: undeclared flag(s) {', '.join(unknown)}; declared: "
+            f"{', '.join(sorted(spec.flags)) or 'none'}"
+        )
+    key = (id(ctx), spec, tuple(sorted((slots or {}).items())), tuple(sorted(flags.items())))
+    if key in _CACHE:
+        return _CACHE[key]
+    stages = {}
+    all_files: dict[str, list[str]] = {}
+    for stage in ("vertex", "fragment", "geometry", "compute"):
+        name = getattr(spec, stage)
+        if name is None:
+            continue
+        source, files = assemble(name, slots, flags)
+        stages[stage] = source
+        all_files[stage] = files
+    try:
+        if "compute" in stages:
+            program = ctx.compute_shader(stages["compute"])
+        else:
+            program = ctx.program(
+                vertex_shader=stages["vertex"],
+                fragment_shader=stages.get("fragment"),
+                geometry_shader=stages.get("geometry"),
+            )
+    except Exception as exc:  # moderngl raises plain Exceptions carrying the driver log
+        text = str(exc)
+        stage = next((s for s in stages if s in text.lower()), None)
+        files = all_files.get(stage) if stage else next(iter(all_files.values()))
+        raise ShaderError(
+            f"program {spec.name} failed to build: " + map_log(text, files).strip().replace("\n", " | ")
+        ) from exc
+    _CACHE[key] = program
+    return program
+
+
+def set_uniforms(program, values: dict) -> None:
+    """Set uniforms the compiler kept; unused ones are optimised away by the driver and skipped.
+    ``bytes`` values are written raw (matrices: column-major float32)."""
+    for key, value in values.items():
+        if key in program:
+            if isinstance(value, bytes):
+                program[key].write(value)
+            else:
+                program[key].value = value

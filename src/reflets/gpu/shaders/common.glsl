@@ -1,0 +1,26 @@
+// Provides PI, INV_PI, TWO_PI and small frame helpers shared by every reflets shader stage.
+const float PI = 3.14159265358979323846;
+const float INV_PI = 0.31830988618379067154;
+const float TWO_PI = 6.28318530717958647692;
+
+// Orthonormal frame (t, b, n) from a normal and a tangent hint; b = sign * cross(n, t) (glTF convention).
+mat3 shading_frame(vec3 n, vec4 tangent) {
+    vec3 t = tangent.xyz - n * dot(n, tangent.xyz);
+    float len = length(t);
+    if (len < 1e-6) {
+        // Duff et al. 2017 branchless ONB when the tangent is missing or parallel to n.
+        float s = n.z >= 0.0 ? 1.0 : -1.0;
+        float a = -1.0 / (s + n.z);
+        t = vec3(1.0 + s * n.x * n.x * a, s * n.x * n.y * a, -s * n.x);
+    } else {
+        t /= len;
+    }
+    vec3 b = (tangent.w < 0.0 ? -1.0 : 1.0) * cross(n, t);
+    return mat3(t, b, n);  // columns: local → world; transpose(frame) * w gives local coordinates
+}
+
+// Equirectangular lookup coordinates, Mitsuba 3 envmap convention (row 0 = up, +y is up).
+vec2 equirect_uv(vec3 d) {
+    float u = atan(d.x, -d.z) / TWO_PI;
+    return vec2(u - floor(u), acos(clamp(d.y, -1.0, 1.0)) / PI);
+}

@@ -1,0 +1,34 @@
+"""HDR render targets and readback: float32 RGBA colour + 32-bit float depth, read back with row 0 = top."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class HDRTarget:
+    """An offscreen float32 framebuffer of a given size, owned by one context."""
+
+    def __init__(self, ctx, width: int, height: int):
+        self.ctx = ctx
+        self.size = (int(width), int(height))
+        self.color = ctx.texture(self.size, 4, dtype="f4")
+        self.depth = ctx.depth_texture(self.size)
+        self.fbo = ctx.framebuffer(color_attachments=[self.color], depth_attachment=self.depth)
+
+    def use(self, clear: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)) -> None:
+        self.fbo.use()
+        self.ctx.viewport = (0, 0, *self.size)
+        self.fbo.clear(*clear, depth=1.0)
+
+    def read(self, components: int = 3) -> np.ndarray:
+        """Colour as float32 (H, W, components); OpenGL's bottom-up rows are flipped so row 0 is the top."""
+        w, h = self.size
+        data = np.frombuffer(self.fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(h, w, 4)
+        return np.ascontiguousarray(data[::-1, :, :components])
+
+    def release(self) -> None:
+        # Bind the default framebuffer first: moderngl restores the last bound framebuffer when it creates
+        # the next one, and a deleted one there raises GL_INVALID_OPERATION.
+        self.ctx.detect_framebuffer(0).use()
+        for obj in (self.fbo, self.color, self.depth):
+            obj.release()

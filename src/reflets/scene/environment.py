@@ -1,0 +1,66 @@
+"""Equirectangular environment maps: loading, rotation, and a deterministic directional-sample grid."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ImageError, SceneError
+from .model import EnvironmentLight, Scene
+
+
+def load_environment(scene: Scene) -> np.ndarray | None:
+    """The scene's environment image (H, W, 3) float32 times its ``scale``, or None."""
+    light = scene.environment
+    if light is None:
+        return None
+    from ..imageio import read_image
+
+    index = scene.light.index(light)
+    try:
+        image = read_image(scene.resolve(light.file))
+    except ImageError as exc:
+        raise SceneError(exc.message, file=exc.file, field=f"light[{index}].file") from None
+    if not np.all(np.isfinite(image)) or np.any(image < 0):
+        raise SceneError("environment image has negative or non-finite pixels", file=scene.resolve(light.file))
+    return (image * np.float32(light.scale)).astype(np.float32)
+
+
+def rotation_y(degrees: float) -> np.ndarray:
+    """3×3 rotation about +y (right-handed)."""
+    a = np.radians(degrees)
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def equirect_direction(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Inverse of the Mitsuba-3 mapping u = atan2(x, −z)/2π, v = acos(y)/π (environment's own frame)."""
+    phi, theta = np.broadcast_arrays(2.0 * np.pi * np.asarray(u, dtype=np.float64), np.pi * np.asarray(v))
+    return np.stack([np.sin(theta) * np.sin(phi), np.cos(theta), -np.sin(theta) * np.cos(phi)], axis=-1)
+
+
+def environment_grid(image: np.ndarray, light: EnvironmentLight, grid: tuple[int, int] = (32, 16)):
+    """The map as ``grid`` = (nu, nv) distant lights: world directions (K, 3) and radiance × solid angle (K, 3).
+
+    Each cell's radiance is the solid-angle-weighted mean of its pixels, so the sum over cells is the exact
+    integral of the map; only the direction inside a cell is approximated (fine for diffuse and broad
+    lobes, too coarse for sharp reflections — those belong to dedicated techniques).
+    """
+    h, w, _ = image.shape
+    nu, nv = grid
+    # Pixel solid angles: Δφ (cos θ0 − cos θ1).
+    theta_edges = np.linspace(0.0, np.pi, h + 1)
+    pix_omega = (2.0 * np.pi / w) * (np.cos(theta_edges[:-1]) - np.cos(theta_edges[1:]))
+    weighted = image.astype(np.float64) * pix_omega[:, None, None]
+    row_of = np.minimum((np.arange(h) * nv) // h, nv - 1)
+    col_of = np.minimum((np.arange(w) * nu) // w, nu - 1)
+    power = np.zeros((nv, nu, 3))
+    np.add.at(power, (row_of[:, None], col_of[None, :]), weighted)
+    # Direction: solid-angle centroid of the cell's pixels.
+    u_pix = (np.arange(w) + 0.5) / w
+    v_pix = (np.arange(h) + 0.5) / h
+    dirs_pix = equirect_direction(u_pix[None, :], v_pix[:, None]) * pix_omega[:, None, None]
+    centroid = np.zeros((nv, nu, 3))
+    np.add.at(centroid, (row_of[:, None], col_of[None, :]), np.broadcast_to(dirs_pix, (h, w, 3)))
+    centroid /= np.maximum(np.linalg.norm(centroid, axis=-1, keepdims=True), 1e-30)
+    world = centroid.reshape(-1, 3) @ rotation_y(light.rotate_y).T
+    return world.astype(np.float32), power.reshape(-1, 3).astype(np.float32)

@@ -1,0 +1,128 @@
+"""Scene files (TOML) and dicts → validated :class:`Scene`, with one-line errors naming file and field."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from ..errors import SceneError
+from .model import EnvironmentLight, FileMesh, Scene
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a TOML scene file; relative paths inside it are relative to its folder."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError("file not found", file=path) from None
+    except IsADirectoryError:
+        raise SceneError("is a directory, expected a .toml scene file", file=path) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(f"cannot read ({exc.__class__.__name__}: {exc})", file=path) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"invalid TOML: {exc}", file=path) from None
+    return load_dict(data, base_dir=path.resolve().parent, source=path)
+
+
+def load_dict(data: dict[str, Any], base_dir: str | Path | None = None, source: str | Path | None = None) -> Scene:
+    """Validate a scene given as a dict (the TOML structure), like ``mitsuba.load_dict``."""
+    if not isinstance(data, dict):
+        raise SceneError(f"a scene must be a table/dict, got {type(data).__name__}", file=source)
+    try:
+        scene = Scene.model_validate({**data, "base_dir": Path(base_dir) if base_dir else None})
+    except ValidationError as exc:
+        raise SceneError(_first_error(exc, data), file=source or "<scene>") from None
+    _check_files(scene, source)
+    return scene
+
+
+def _check_files(scene: Scene, source) -> None:
+    """Referenced files must exist now, not half-way through a render."""
+    for i, mesh in enumerate(scene.mesh):
+        if isinstance(mesh, FileMesh) and not scene.resolve(mesh.file).is_file():
+            raise SceneError(f"mesh file not found: {scene.resolve(mesh.file)}", file=source, field=f"mesh[{i}].file")
+    for i, light in enumerate(scene.light):
+        if isinstance(light, EnvironmentLight) and not scene.resolve(light.file).is_file():
+            raise SceneError(
+                f"environment image not found: {scene.resolve(light.file)}",
+                file=source,
+                field=f"light[{i}].file",
+            )
+
+
+def _field_path(loc: tuple, data: Any) -> str:
+    """``('mesh', 0, 'plane', 'size')`` → ``mesh[0].size``: walk the input, dropping union tags."""
+    parts: list[str] = []
+    node = data
+    skipped = False
+    for item in loc:
+        if isinstance(item, int):
+            parts.append(f"[{item}]")
+            node = node[item] if isinstance(node, list) and item < len(node) else None
+            skipped = False
+        elif not skipped and _is_tag(item, node):
+            skipped = True  # a discriminator tag inserted by pydantic, not a key the user wrote
+            continue
+        else:
+            parts.append(("." if parts else "") + str(item))
+            node = node.get(item) if isinstance(node, dict) else None
+            skipped = False
+    return "".join(parts) or "<scene>"
+
+
+def _lookup(data: Any, loc: tuple) -> Any:
+    """The input value at a pydantic location (tags skipped), or None."""
+    node = data
+    for item in loc:
+        if isinstance(item, int) and isinstance(node, list) and item < len(node):
+            node = node[item]
+        elif isinstance(node, dict) and item in node and not (_is_tag(item, node) and item != "file"):
+            node = node[item]
+        elif isinstance(node, dict) and _is_tag(item, node):
+            continue
+        else:
+            return None
+    return node
+
+
+def _is_tag(item: Any, node: Any) -> bool:
+    """Is ``item`` the union tag pydantic put in the location (the value of ``type``/``shape``, or "file")?"""
+    if not isinstance(node, dict):
+        return False
+    if node.get("type") == item or node.get("shape") == item:
+        return True
+    return item == "file" and "file" in node and "shape" not in node and "type" not in node
+
+
+def _first_error(exc: ValidationError, data: dict) -> str:
+    """One line for the first validation error, phrased for a scene author."""
+    err = exc.errors(include_url=False)[0]
+    loc, kind, msg = err["loc"], err["type"], err["msg"]
+    field = _field_path(loc, data)
+    if kind == "extra_forbidden":
+        return f"{field}: unknown key; check the spelling against `reflets schema`"
+    if kind == "missing" and loc and isinstance(loc[-1], int):
+        vector = _field_path(loc[:-1], data)
+        got = _lookup(data, loc[:-1])
+        count = len(got) if isinstance(got, list) else "?"
+        return f"{vector}: wrong length: got {count} values, needs at least {loc[-1] + 1}"
+    if kind == "missing":
+        return f"{field}: required field is missing"
+    if kind in ("too_long", "too_short"):
+        expected = err.get("ctx", {}).get("max_length") or err.get("ctx", {}).get("min_length")
+        return f"{field}: wrong length ({msg[0].lower() + msg[1:]}); expected {expected} values"
+    if kind == "finite_number":
+        return f"{field}: must be a finite number (got {err.get('input')!r})"
+    if kind in ("union_tag_invalid", "union_tag_not_found"):
+        ctx = err.get("ctx", {})
+        return f"{field}: unknown type {ctx.get('tag', '')!r}; allowed: {ctx.get('expected_tags', '')}"
+    if kind == "value_error":
+        msg = msg.removeprefix("Value error, ")
+        return msg if msg.startswith(("mesh[", "light", "background")) else f"{field}: {msg}"
+    return f"{field}: {msg[0].lower() + msg[1:]} (got {err.get('input')!r})"

@@ -1,0 +1,64 @@
+"""Triangle mesh arrays shared by procedural shapes, file loaders, the GPU renderer and references."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class MeshData:
+    """An indexed triangle mesh with a full shading frame per vertex.
+
+    Attributes
+    ----------
+    positions : (N, 3) float32
+    normals : (N, 3) float32, unit length
+    tangents : (N, 4) float32; xyz is a unit tangent along increasing u, orthogonal to the normal;
+        w = ±1 is the handedness, so that the bitangent is ``w * cross(normal, tangent)`` (glTF convention).
+        Anisotropic BRDFs are oriented by this frame.
+    uvs : (N, 2) float32 texture coordinates
+    indices : (M, 3) uint32, counter-clockwise seen from the side the normals point to
+    """
+
+    positions: np.ndarray
+    normals: np.ndarray
+    tangents: np.ndarray
+    uvs: np.ndarray
+    indices: np.ndarray
+
+    @property
+    def n_vertices(self) -> int:
+        return int(self.positions.shape[0])
+
+    @property
+    def n_triangles(self) -> int:
+        return int(self.indices.shape[0])
+
+    def transformed(self, matrix: np.ndarray) -> MeshData:
+        """Apply a 4×4 affine matrix: positions by M, normals by the inverse transpose, tangents by M."""
+        m = np.asarray(matrix, dtype=np.float64)
+        lin = m[:3, :3]
+        pos = self.positions.astype(np.float64) @ lin.T + m[:3, 3]
+        nrm = self.normals.astype(np.float64) @ np.linalg.inv(lin)  # == (inv(lin).T @ n.T).T
+        nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+        tan = self.tangents[:, :3].astype(np.float64) @ lin.T
+        # Re-orthogonalise against the new normal (non-uniform scale shears the frame).
+        tan -= nrm * np.sum(tan * nrm, axis=1, keepdims=True)
+        tan /= np.maximum(np.linalg.norm(tan, axis=1, keepdims=True), 1e-20)
+        w = self.tangents[:, 3:4].astype(np.float64) * np.sign(np.linalg.det(lin))
+        indices = self.indices if np.linalg.det(lin) > 0 else self.indices[:, ::-1].copy()
+        return MeshData(
+            positions=pos.astype(np.float32),
+            normals=nrm.astype(np.float32),
+            tangents=np.concatenate([tan, w], axis=1).astype(np.float32),
+            uvs=self.uvs,
+            indices=np.ascontiguousarray(indices, dtype=np.uint32),
+        )
+
+    def interleaved(self) -> np.ndarray:
+        """Vertex buffer layout for the GPU: position 3f, normal 3f, tangent 4f, uv 2f (48 bytes)."""
+        return np.ascontiguousarray(
+            np.concatenate([self.positions, self.normals, self.tangents, self.uvs], axis=1), dtype=np.float32
+        )

@@ -1,0 +1,302 @@
+"""The validated scene model: camera, meshes, named materials, lights, background.
+
+Scenes are plain data, like Mitsuba dicts: every object names its ``type`` (or ``shape``) and the
+model rejects unknown keys, wrong vector lengths and out-of-range values. Units: metres (or any unit
+used consistently), degrees for angles, radiometric quantities in linear RGB.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
+
+from ..brdf import MaterialSpec
+
+Finite = Annotated[float, Field(allow_inf_nan=False)]
+NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+Vec3 = tuple[Finite, Finite, Finite]
+Color = tuple[NonNeg, NonNeg, NonNeg]
+Count = Annotated[int, Field(ge=1, le=4096)]  # tessellation segments
+
+MAX_IMAGE_SIDE = 16384
+
+
+class Strict(BaseModel):
+    """Base for scene objects: unknown keys are errors, assignments are validated."""
+
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False)
+
+
+class Camera(Strict):
+    """Pinhole camera. ``fov_y`` is the full vertical field of view in degrees (Mitsuba, OpenGL)."""
+
+    position: Vec3
+    look_at: Vec3
+    up: Vec3 = (0.0, 1.0, 0.0)
+    fov_y: Annotated[float, Field(gt=0, lt=180, allow_inf_nan=False)] = 45.0
+    size: tuple[Annotated[int, Field(ge=1, le=MAX_IMAGE_SIDE)], Annotated[int, Field(ge=1, le=MAX_IMAGE_SIDE)]] = (
+        640,
+        480,
+    )
+
+    @model_validator(mode="after")
+    def _non_degenerate(self) -> Camera:
+        forward = np.subtract(self.look_at, self.position)
+        if np.linalg.norm(forward) == 0:
+            raise ValueError("position and look_at coincide; the view direction is undefined")
+        if np.linalg.norm(np.cross(forward, self.up)) < 1e-9 * np.linalg.norm(forward) * max(
+            np.linalg.norm(self.up), 1e-30
+        ):
+            raise ValueError("up is parallel to the view direction (or zero); choose another up vector")
+        return self
+
+    @property
+    def width(self) -> int:
+        return self.size[0]
+
+    @property
+    def height(self) -> int:
+        return self.size[1]
+
+
+class Transform(Strict):
+    """Object-to-world transform: scale, then rotate about X, Y, Z (degrees), then translate."""
+
+    translate: Vec3 = (0.0, 0.0, 0.0)
+    rotate: Vec3 = (0.0, 0.0, 0.0)
+    scale: Positive | tuple[Positive, Positive, Positive] = 1.0
+
+    def matrix(self) -> np.ndarray:
+        from .transform import transform_matrix
+
+        return transform_matrix(self.translate, self.rotate, self.scale)
+
+
+class MeshBase(Strict):
+    name: str | None = None
+    material: str
+    transform: Transform = Transform()
+
+
+class FileMesh(MeshBase):
+    """A mesh read from OBJ / PLY / glTF / GLB / STL / OFF through trimesh (path relative to the scene file)."""
+
+    file: Path
+
+
+class PlaneMesh(MeshBase):
+    """Rectangle in the y = 0 plane, centred at the origin, normal +y."""
+
+    shape: Literal["plane"]
+    size: tuple[Positive, Positive] = (1.0, 1.0)
+    segments: tuple[Count, Count] = (1, 1)
+
+
+class SphereMesh(MeshBase):
+    """Sphere centred at the origin, (u, v) = (azimuth, polar angle) parameterisation."""
+
+    shape: Literal["sphere"]
+    radius: Positive = 1.0
+    segments: tuple[Count, Count] = (256, 128)
+
+
+class CubeMesh(MeshBase):
+    shape: Literal["cube"]
+    size: Positive | tuple[Positive, Positive, Positive] = 1.0
+
+
+class CylinderMesh(MeshBase):
+    """Capped cylinder along y, centred at the origin."""
+
+    shape: Literal["cylinder"]
+    radius: Positive = 0.5
+    height: Positive = 1.0
+    segments: Count = 128
+
+
+class TorusMesh(MeshBase):
+    """Torus around the y axis."""
+
+    shape: Literal["torus"]
+    major: Positive = 1.0
+    minor: Positive = 0.25
+    segments: tuple[Count, Count] = (128, 64)
+
+    @model_validator(mode="after")
+    def _minor_below_major(self) -> TorusMesh:
+        if self.minor >= self.major:
+            raise ValueError(f"minor ({self.minor}) must be smaller than major ({self.major})")
+        return self
+
+
+SHAPE_MODELS: dict[str, type[MeshBase]] = {
+    "plane": PlaneMesh,
+    "sphere": SphereMesh,
+    "cube": CubeMesh,
+    "cylinder": CylinderMesh,
+    "torus": TorusMesh,
+}
+
+
+def _mesh_tag(value: Any) -> str | None:
+    if isinstance(value, dict):
+        return "file" if "file" in value else value.get("shape")
+    return "file" if isinstance(value, FileMesh) else getattr(value, "shape", None)
+
+
+_SHAPES_ALLOWED = ", ".join(['file = "…"'] + [f'shape = "{s}"' for s in SHAPE_MODELS])
+Mesh = Annotated[
+    Union[  # noqa: UP007 (Tag needs the typing form)
+        Annotated[FileMesh, Tag("file")],
+        *(Annotated[m, Tag(name)] for name, m in SHAPE_MODELS.items()),
+    ],
+    Discriminator(
+        _mesh_tag,
+        custom_error_type="mesh_kind",
+        custom_error_message=f"unknown or missing shape; allowed: {_SHAPES_ALLOWED}",
+    ),
+]
+
+
+class PointLight(Strict):
+    """Isotropic point light; ``intensity`` is radiant intensity (W/sr) per RGB channel."""
+
+    type: Literal["point"]
+    position: Vec3
+    intensity: Color
+
+
+class DirectionalLight(Strict):
+    """Distant light; ``direction`` is the direction the light travels along, ``irradiance`` on a
+    surface facing it (W/m²)."""
+
+    type: Literal["directional"]
+    direction: Vec3
+    irradiance: Color
+
+    @field_validator("direction")
+    @classmethod
+    def _non_zero(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
+        if not np.any(v):
+            raise ValueError("direction must not be the zero vector")
+        return v
+
+
+class QuadLight(Strict):
+    """Parallelogram light from corners c1 (bottom-left), c2 (bottom-right), c4 (top-left), constant
+    radiance; emits on the side of normalize((c2 − c1) × (c4 − c1)) unless two-sided."""
+
+    type: Literal["quad"]
+    corners: tuple[Vec3, Vec3, Vec3]
+    radiance: Color
+    two_sided: bool = False
+
+    @model_validator(mode="after")
+    def _non_degenerate(self) -> QuadLight:
+        c1, c2, c4 = (np.asarray(c) for c in self.corners)
+        if np.linalg.norm(np.cross(c2 - c1, c4 - c1)) <= 1e-12:
+            raise ValueError("corners are collinear; the quad has zero area")
+        return self
+
+    def polygon(self) -> np.ndarray:
+        """Vertices in order c1, c2, c3, c4 (counter-clockwise around the emitting normal)."""
+        c1, c2, c4 = (np.asarray(c, dtype=np.float64) for c in self.corners)
+        return np.stack([c1, c2, c2 + c4 - c1, c4])
+
+
+class PolygonLight(Strict):
+    """Planar convex polygon light; emits on the side of the normal given by the vertex order
+    (counter-clockwise seen from the lit side) unless two-sided."""
+
+    type: Literal["polygon"]
+    vertices: list[Vec3] = Field(min_length=3, max_length=16)
+    radiance: Color
+    two_sided: bool = False
+
+    @model_validator(mode="after")
+    def _planar_convex(self) -> PolygonLight:
+        p = np.asarray(self.vertices, dtype=np.float64)
+        edges = np.roll(p, -1, axis=0) - p
+        normal = np.sum(np.cross(p, np.roll(p, -1, axis=0)), axis=0)  # Newell's method
+        size = np.max(np.linalg.norm(edges, axis=1))
+        if np.linalg.norm(normal) <= 1e-12 * size * size:
+            raise ValueError("vertices have zero area")
+        n = normal / np.linalg.norm(normal)
+        if np.max(np.abs((p - p[0]) @ n)) > 1e-4 * size:
+            raise ValueError("vertices are not coplanar")
+        turns = np.cross(edges, np.roll(edges, -1, axis=0)) @ n
+        if np.any(turns < -1e-9 * size * size):
+            raise ValueError("polygon is not convex (or its vertices are not in order)")
+        return self
+
+    def polygon(self) -> np.ndarray:
+        return np.asarray(self.vertices, dtype=np.float64)
+
+
+class EnvironmentLight(Strict):
+    """Equirectangular environment map (EXR, HDR, NPY, PNG), same orientation as Mitsuba 3's ``envmap``:
+    direction d maps to u = atan2(d.x, −d.z) / 2π (mod 1), v = acos(d.y) / π (row 0 = up)."""
+
+    type: Literal["environment"]
+    file: Path
+    scale: NonNeg = 1.0
+    rotate_y: Finite = 0.0
+
+
+LIGHT_MODELS = {
+    "point": PointLight,
+    "directional": DirectionalLight,
+    "quad": QuadLight,
+    "polygon": PolygonLight,
+    "environment": EnvironmentLight,
+}
+Light = Annotated[
+    Union[PointLight, DirectionalLight, QuadLight, PolygonLight, EnvironmentLight],  # noqa: UP007
+    Field(discriminator="type"),
+]
+
+
+class Scene(Strict):
+    """A whole scene. ``base_dir`` resolves relative file paths (the scene file's folder)."""
+
+    title: str | None = None
+    description: str | None = None
+    camera: Camera
+    materials: dict[str, MaterialSpec] = Field(default_factory=dict)
+    mesh: list[Mesh] = Field(default_factory=list)
+    light: list[Light] = Field(default_factory=list)
+    background: Color | Literal["environment"] | None = None
+    method: str | None = None
+    base_dir: Path | None = Field(default=None, exclude=True)
+
+    @model_validator(mode="after")
+    def _references(self) -> Scene:
+        for i, m in enumerate(self.mesh):
+            if m.material not in self.materials:
+                known = ", ".join(sorted(self.materials)) or "none defined"
+                raise ValueError(f"mesh[{i}].material: unknown material '{m.material}'; defined materials: {known}")
+        envs = [light for light in self.light if isinstance(light, EnvironmentLight)]
+        if len(envs) > 1:
+            raise ValueError("light: at most one environment light is allowed")
+        if self.background == "environment" and not envs:
+            raise ValueError('background = "environment" needs a light of type "environment"')
+        return self
+
+    @property
+    def environment(self) -> EnvironmentLight | None:
+        return next((light for light in self.light if isinstance(light, EnvironmentLight)), None)
+
+    def background_color(self) -> tuple[float, float, float] | None:
+        """RGB of a constant background, or None when the environment map is shown."""
+        if self.background is None:
+            return None if self.environment is not None else (0.0, 0.0, 0.0)
+        return None if self.background == "environment" else tuple(self.background)
+
+    def resolve(self, path: Path) -> Path:
+        """A path from the scene, made absolute against the scene file's folder."""
+        path = Path(path).expanduser()
+        return path if path.is_absolute() or self.base_dir is None else self.base_dir / path

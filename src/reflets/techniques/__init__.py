@@ -1,0 +1,15 @@
+"""Rendering techniques, registered by name for ``--method`` / ``render(method=...)``."""
+
+from . import forward  # noqa: F401  (registers forward and the AOV methods)
+from .base import TECHNIQUES, Technique, TechniqueParams, get_technique, register_technique
+
+DEFAULT_METHOD = "forward"
+
+__all__ = [
+    "TECHNIQUES",
+    "Technique",
+    "TechniqueParams",
+    "get_technique",
+    "register_technique",
+    "DEFAULT_METHOD",
+]

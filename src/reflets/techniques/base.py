@@ -1,0 +1,64 @@
+"""The technique interface and registry behind ``--method``.
+
+A technique declares its parameters (a pydantic model, so a bad value is a clear error), prepares GPU
+resources for one scene in ``prepare`` and draws frames in ``render``. Techniques are found by name
+(``register_technique``), like Mitsuba plugins.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, ValidationError
+
+from ..errors import ArgumentError
+from ..scene.model import Scene
+
+TECHNIQUES: dict[str, type[Technique]] = {}
+
+
+class TechniqueParams(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class Technique:
+    """Base class: ``Technique(ctx, **params)``, then ``prepare(scene)`` once and ``render(...)`` per frame."""
+
+    name: ClassVar[str]
+    summary: ClassVar[str] = ""
+    Params: ClassVar[type[TechniqueParams]] = TechniqueParams
+
+    def __init__(self, ctx, **params: Any):
+        self.ctx = ctx
+        try:
+            self.params = self.Params(**params)
+        except ValidationError as exc:
+            err = exc.errors(include_url=False)[0]
+            field = ".".join(str(p) for p in err["loc"])
+            allowed = ", ".join(self.Params.model_fields) or "none"
+            raise ArgumentError(f"{err['msg']} (parameters of '{self.name}': {allowed})", field=field) from None
+        self.scene: Scene | None = None
+
+    def prepare(self, scene: Scene) -> None:
+        raise NotImplementedError
+
+    def render(self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int = 1) -> np.ndarray:
+        raise NotImplementedError
+
+    def release(self) -> None:
+        """Free GPU resources (the context itself stays)."""
+
+
+def register_technique(cls: type[Technique]) -> type[Technique]:
+    """Class decorator: make a technique selectable by ``cls.name``. Duplicate names are errors."""
+    if cls.name in TECHNIQUES:
+        raise ValueError(f"technique '{cls.name}' is registered twice")
+    TECHNIQUES[cls.name] = cls
+    return cls
+
+
+def get_technique(name: str) -> type[Technique]:
+    if name not in TECHNIQUES:
+        raise ArgumentError(f"unknown method '{name}'; allowed: {', '.join(sorted(TECHNIQUES))}", field="method")
+    return TECHNIQUES[name]

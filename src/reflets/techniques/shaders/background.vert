@@ -1,0 +1,7 @@
+// Provides a full-screen triangle with the clip-space position passed on for ray reconstruction.
+out vec2 v_ndc;
+void main() {
+    vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2)) * 2.0 - 1.0;
+    v_ndc = p;
+    gl_Position = vec4(p, 1.0, 1.0);
+}

@@ -1,0 +1,28 @@
+// Provides the forward shading pass: one BRDF (slot BRDF) lit by every light, or a geometry AOV (OUTPUT).
+#include BRDF
+#include "reflets/techniques/shaders/lights.glsl"
+
+in vec3 v_position;
+in vec3 v_normal;
+in vec4 v_tangent;
+in vec2 v_uv;
+
+uniform vec3 u_eye;
+
+out vec4 f_color;
+
+void main() {
+    vec3 n = normalize(v_normal);
+    if (!gl_FrontFacing) n = -n;  // surfaces are two-sided: shade the side the camera sees
+    mat3 frame = shading_frame(n, v_tangent);
+#if OUTPUT == 1
+    f_color = vec4(v_position, 1.0);
+#elif OUTPUT == 2
+    f_color = vec4(n, 1.0);
+#elif OUTPUT == 3
+    f_color = vec4(v_uv, 0.0, 1.0);
+#else
+    vec3 wo = transpose(frame) * normalize(u_eye - v_position);
+    f_color = vec4(direct_lighting(v_position, frame, wo), 1.0);
+#endif
+}

@@ -1,0 +1,207 @@
+"""The `reflets` command: happy paths, and every bad input → one line, exit 2, no traceback, no file."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from reflets.cli import main
+from reflets.imageio import read_image, write_image
+
+
+def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_render_minimal_scene_to_exr_png_npy(ctx, capsys, tmp_path, minimal_toml):
+    for ext in ("exr", "png", "npy"):
+        out = tmp_path / f"img.{ext}"
+        code, stdout, _ = run_cli(capsys, "render", str(minimal_toml), "-o", str(out))
+        assert code == 0 and out.is_file() and "wrote" in stdout
+    exr = read_image(tmp_path / "img.exr")
+    assert exr.shape == (240, 320, 3)
+    assert np.array_equal(exr, read_image(tmp_path / "img.npy"))
+
+
+def test_render_size_method_and_spp_options(ctx, capsys, tmp_path, minimal_toml):
+    out = tmp_path / "n.npy"
+    code, _, _ = run_cli(
+        capsys,
+        "render",
+        str(minimal_toml),
+        "-o",
+        str(out),
+        "--size",
+        "64x48",
+        "--method",
+        "normal",
+        "--spp",
+        "4",
+    )
+    assert code == 0
+    normals = np.load(out)
+    assert normals.shape == (48, 64, 3)
+    assert np.allclose(normals[30, 32], [0, 1, 0], atol=1e-5)
+
+
+def test_compare_identical_gives_zero_and_json_keys(ctx, capsys, tmp_path, rng):
+    path = tmp_path / "x.exr"
+    write_image(path, rng.random((20, 30, 3)).astype(np.float32))
+    code, out, _ = run_cli(capsys, "compare", str(path), str(path), "--json")
+    result = json.loads(out)
+    assert code == 0
+    assert set(result) == {"rmse", "relmse", "psnr", "max_abs", "flip"}
+    assert result["rmse"] == 0 and result["max_abs"] == 0 and result["flip"] == 0
+
+
+def test_compare_two_images_matches_numpy_and_writes_diff(capsys, tmp_path, rng):
+    a = rng.random((20, 30, 3)).astype(np.float32) * 4
+    b = a + rng.normal(0, 0.1, a.shape).astype(np.float32).clip(-a, None)
+    write_image(tmp_path / "a.exr", a)
+    write_image(tmp_path / "b.exr", b)
+    code, out, _ = run_cli(
+        capsys,
+        "compare",
+        str(tmp_path / "b.exr"),
+        str(tmp_path / "a.exr"),
+        "--json",
+        "--diff",
+        str(tmp_path / "d.png"),
+    )
+    result = json.loads(out)
+    d = b.astype(np.float64) - a
+    assert code == 0 and (tmp_path / "d.png").is_file()
+    assert result["rmse"] == pytest.approx(np.sqrt(np.mean(d**2)), rel=1e-9)
+    assert result["relmse"] == pytest.approx(np.mean(d**2 / (a.astype(np.float64) ** 2 + 1e-2)), rel=1e-9)
+    assert result["max_abs"] == pytest.approx(np.max(np.abs(d)), rel=1e-9)
+    assert result["psnr"] == pytest.approx(10 * np.log10(a.max() ** 2 / np.mean(d**2)), rel=1e-7)
+    assert 0 < result["flip"] < 1
+
+
+def test_schema_is_json_with_the_scene_sections(capsys):
+    code, out, _ = run_cli(capsys, "schema")
+    schema = json.loads(out)
+    assert code == 0
+    assert {"camera", "materials", "mesh", "light", "background"} <= set(schema["properties"])
+    assert "base_dir" not in schema["properties"]
+
+
+def test_info_names_renderer_and_methods(ctx, capsys):
+    code, out, _ = run_cli(capsys, "info", "--json")
+    info = json.loads(out)
+    assert code == 0
+    assert info["opengl"]["renderer"] and "forward" in info["methods"]
+
+
+# ---------------------------------------------------------------- bad input: exit 2, one line, no output file
+
+
+def _scene(tmp_path, text: str, name: str = "s.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+BAD = {
+    "missing scene file": (lambda p, t: [str(p / "nope.toml")], "nope.toml"),
+    "scene is a directory": (lambda p, t: [str(p)], "directory"),
+    "invalid TOML": (lambda p, t: [str(_scene(p, t + "\n[[mesh\n"))], "invalid TOML"),
+    "unknown key": (lambda p, t: [str(_scene(p, t.replace("fov_y", "fovy")))], "camera.fovy"),
+    "unknown material type": (lambda p, t: [str(_scene(p, t.replace('"lambert"', '"glass"')))], "glass"),
+    "unknown shape": (lambda p, t: [str(_scene(p, t.replace('"plane"', '"cone"')))], "mesh[0]"),
+    "wrong vector length": (
+        lambda p, t: [str(_scene(p, t.replace("[0, 2, 0]", "[0, 2]")))],
+        "light[0].position",
+    ),
+    "negative radiance": (
+        lambda p, t: [str(_scene(p, t.replace("[10, 10, 10]", "[10, -10, 10]")))],
+        "light[0].intensity",
+    ),
+    "NaN albedo": (
+        lambda p, t: [str(_scene(p, t.replace("[0.8, 0.8, 0.8]", "[0.8, nan, 0.8]")))],
+        "materials.floor.albedo",
+    ),
+    "zero image size in file": (
+        lambda p, t: [str(_scene(p, t.replace("[320, 240]", "[0, 240]")))],
+        "camera.size",
+    ),
+    "zero --size": (lambda p, t: [str(_scene(p, t)), "--size", "0x240"], "--size"),
+    "absurd --size": (lambda p, t: [str(_scene(p, t)), "--size", "100000x100000"], "--size"),
+    "malformed --size": (lambda p, t: [str(_scene(p, t)), "--size", "big"], "--size"),
+    "missing mesh file": (
+        lambda p, t: [str(_scene(p, t + '\n[[mesh]]\nfile = "gone.obj"\nmaterial = "floor"\n'))],
+        "mesh[1].file",
+    ),
+    "unknown method": (lambda p, t: [str(_scene(p, t)), "--method", "raytrace"], "forward"),
+    "bad spp": (lambda p, t: [str(_scene(p, t)), "--spp", "3"], "spp"),
+    "unknown technique parameter": (lambda p, t: [str(_scene(p, t)), "--param", "samples=3"], "area_samples"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_input_exits_2_with_one_line_and_writes_nothing(ctx, capsys, tmp_path, minimal_toml, case):
+    make_args, word = BAD[case]
+    out = tmp_path / "out.exr"
+    text = minimal_toml.read_text()
+    minimal_toml.unlink()
+    code, stdout, stderr = run_cli(capsys, "render", *make_args(tmp_path, text), "-o", str(out))
+    assert code == 2
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1, stderr
+    assert word in lines[0], f"{word!r} not in {lines[0]!r}"
+    assert "Traceback" not in stderr
+    assert not out.exists()
+    assert [f.name for f in tmp_path.iterdir() if f.name.startswith(".out")] == []  # no temp file left
+
+
+def test_unwritable_output_paths_fail_before_rendering(capsys, tmp_path, minimal_toml):
+    for target, word in [
+        (tmp_path / "no" / "dir" / "x.exr", "does not exist"),
+        (tmp_path / "x.tiff", "allowed"),
+        (tmp_path / "folder.exr", "directory"),
+    ]:
+        (tmp_path / "folder.exr").mkdir(exist_ok=True)
+        code, _, err = run_cli(capsys, "render", str(minimal_toml), "-o", str(target))
+        assert code == 2 and word in err and "Traceback" not in err
+    assert not (tmp_path / "no").exists()
+
+
+def test_existing_output_is_kept_when_the_scene_is_bad(capsys, tmp_path):
+    out = tmp_path / "keep.exr"
+    out.write_bytes(b"precious")
+    bad = _scene(tmp_path, "[camera]\nposition = [0, 0, 1]\n")
+    code, _, _ = run_cli(capsys, "render", str(bad), "-o", str(out))
+    assert code == 2 and out.read_bytes() == b"precious"
+
+
+def test_compare_bad_inputs(capsys, tmp_path, rng):
+    write_image(tmp_path / "a.exr", rng.random((4, 4, 3)).astype(np.float32))
+    write_image(tmp_path / "b.exr", rng.random((5, 4, 3)).astype(np.float32))
+    for argv, word in [
+        (["missing.exr", str(tmp_path / "a.exr")], "missing.exr"),
+        ([str(tmp_path / "a.exr"), str(tmp_path / "b.exr")], "shape"),
+    ]:
+        code, _, err = run_cli(capsys, "compare", *argv)
+        assert code == 2 and word in err and len(err.strip().splitlines()) == 1
+
+
+def test_real_process_prints_no_traceback_and_debug_shows_it(tmp_path):
+    bad = _scene(tmp_path, "[camera]\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\nsize = [-1, 2]\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+
+    def run(*argv):
+        cmd = [sys.executable, "-m", "reflets.cli", *argv]
+        return subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=120)
+
+    plain = run("render", str(bad), "-o", str(tmp_path / "x.exr"))
+    assert plain.returncode == 2 and "Traceback" not in plain.stderr
+    assert plain.stderr.startswith("reflets: error:") and "camera.size" in plain.stderr
+    debug = run("--debug", "render", str(bad), "-o", str(tmp_path / "x.exr"))
+    assert "Traceback" in debug.stderr and debug.returncode != 0
