@@ -205,3 +205,21 @@ def test_real_process_prints_no_traceback_and_debug_shows_it(tmp_path):
     assert plain.stderr.startswith("reflets: error:") and "camera.size" in plain.stderr
     debug = run("--debug", "render", str(bad), "-o", str(tmp_path / "x.exr"))
     assert "Traceback" in debug.stderr and debug.returncode != 0
+
+
+def test_minimal_scene_renders_from_a_fresh_process_in_under_five_seconds(tmp_path, minimal_toml):
+    """The issue's budget, start-up included (measured median here: 0.6 s on 2 cores with llvmpipe)."""
+    import time
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    start = time.perf_counter()
+    proc = subprocess.run(
+        [sys.executable, "-m", "reflets.cli", "render", str(minimal_toml), "-o", str(tmp_path / "m.exr")],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=60,
+    )
+    elapsed = time.perf_counter() - start
+    assert proc.returncode == 0, proc.stderr
+    assert elapsed < 5.0

@@ -131,7 +131,7 @@ def _print_summary(results: list[DemoResult], info: dict, out_dir: Path) -> None
     for r in results:
         err = "—" if r.analytic_max_rel_error is None else f"{r.analytic_max_rel_error:.2e}"
         table.add_row(r.name, r.method, r.size, f"{r.prepare_ms:.0f}", f"{r.frame_ms:.1f}", err)
-    console = Console()
+    console = Console(width=max(110, Console().width))
     console.print(table)
     console.print(f"gallery: {out_dir / 'index.html'}")
 

@@ -68,8 +68,8 @@ def analytic_image(scene: Scene, size: tuple[int, int] | None = None):
             wi /= np.linalg.norm(wi)
             cos = np.maximum(normal @ wi, 0.0)
             radiance += rho / np.pi * np.asarray(light.irradiance) * cos[..., None]
-            lit |= cos > 0.05
-        # ... and away from the terminator, where a relative error is ill-conditioned (n·l > 0.05).
+            lit |= cos > 0.1
+        # ... and away from the terminator, where a relative error is ill-conditioned (n·l > 0.1).
         mask &= lit
     else:
         raise NotAnalytic("supported: Lambert plane + point lights, Lambert sphere + directional lights")
