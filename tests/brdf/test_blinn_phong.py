@@ -2,10 +2,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from brdf_checks import check_glsl_parity, run_standard_checks
 from brdf_helpers import hemisphere_albedo
 
 from reflets.brdf import BlinnPhong
-from reflets.brdf.gpu_eval import eval_glsl
 
 CASES = [
     dict(kd=(0.1, 0.2, 0.3), ks=(0.5, 0.5, 0.5), exponent=50, normalized=False),
@@ -28,12 +28,13 @@ def test_blinn_phong_closed_form(directions, params):
 
 
 @pytest.mark.parametrize("params", CASES, ids=lambda p: f"e{p['exponent']}")
-def test_blinn_phong_glsl_matches_numpy(ctx, directions, params):
-    wo, wi = directions
-    m = BlinnPhong(**params)
-    ref = m.eval(wo, wi)
-    gpu = eval_glsl(m, wo, wi, ctx)
-    assert np.max(np.abs(gpu - ref) / np.maximum(np.abs(ref), 1e-3)) < 2e-4, m
+def test_blinn_phong_glsl_matches_numpy(ctx, rng, params):
+    check_glsl_parity(BlinnPhong(**params), ctx, rng)
+
+
+@pytest.mark.parametrize("params", CASES, ids=lambda p: f"e{p['exponent']}")
+def test_blinn_phong_standard_checks(rng, params):
+    run_standard_checks(BlinnPhong(**params), rng)
 
 
 def test_normalized_form_is_reciprocal_and_document_form_is_not(directions):

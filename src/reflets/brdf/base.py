@@ -1,9 +1,19 @@
 """The material interface and registry shared by scene files, the GPU renderer and the references.
 
 A material is data (a pydantic model with keyword parameters and documented defaults) plus two
-evaluations of the same BRDF: NumPy float64 (``eval``, the reference) and a GLSL file defining
-``vec3 brdf_eval(vec3 wo, vec3 wi)``. Both work in the local shading frame (normal = +z, tangent = +x)
-with pbrt's argument order ``(wo, wi)``; they return f_r without the cosine, and 0 below the horizon.
+evaluations of the same BRDF: NumPy float64 (the reference) and a GLSL file defining
+``vec3 brdf_eval(vec3 wo, vec3 wi)``. Both work in the **local shading frame** — x = tangent, y = bitangent,
+z = normal — with pbrt's argument order everywhere: ``wo`` is the direction towards the viewer, ``wi``
+towards the light, both unit vectors pointing away from the surface. They return f_r without the cosine.
+
+NumPy interface (vectorised over leading axes, float64):
+
+- ``eval(wo, wi) -> (..., 3)``: f_r; 0 when ``wo`` or ``wi`` is below the surface (z ≤ 0);
+- ``sample(wo, u1, u2) -> (wi, pdf)``: a direction drawn with density ``pdf`` (solid angle); ``wi`` may fall
+  below the surface (then ``eval`` is 0) — ``pdf`` is still its true density. A *failed* sample (e.g. a half
+  vector facing away from ``wo``) comes back with pdf 0 and carries no contribution; ``pdf`` integrates over
+  the sphere to 1 minus the probability of failing (exactly 1 for models that never fail);
+- ``pdf(wo, wi) -> (...)``: the density ``sample`` draws ``wi`` with.
 """
 
 from __future__ import annotations
@@ -15,18 +25,43 @@ from pydantic import BaseModel, ConfigDict, Field
 
 MATERIALS: dict[str, type[Material]] = {}
 
+Unit = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
+NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+#: an RGB reflectance in [0, 1] per channel
+Reflectance = tuple[Unit, Unit, Unit]
+#: an RGB scale factor ≥ 0 per channel
+RGB = tuple[NonNeg, NonNeg, NonNeg]
+
 
 class Material(BaseModel):
-    """Base of every material model; subclasses set ``type`` (a Literal) and ``glsl``."""
+    """Base of every material model; subclasses set ``type`` (a Literal with a default) and ``glsl``."""
 
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
 
     #: package path of the GLSL twin, e.g. "reflets/brdf/glsl/lambert.glsl"
     glsl: ClassVar[str]
+    @property
+    def reciprocal(self) -> bool:
+        """f(wo, wi) == f(wi, wo) with these parameters (the tests check it when True)."""
+        return True
+
+    @property
+    def energy_conserving(self) -> bool:
+        """Directional albedo ≤ 1 for every wo with these parameters (the tests run a white furnace)."""
+        return True
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         """BRDF value f_r(wo, wi), shape (..., 3), float64; zero when wo or wi is below the surface."""
         raise NotImplementedError
+
+    def sample(self, wo: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Importance-sample wi given wo and two uniform numbers in [0, 1); returns (wi, pdf)."""
+        wi = sample_cosine(u1, u2)
+        return wi, pdf_cosine(wi)
+
+    def pdf(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        """Solid-angle density of ``sample`` (default: cosine-weighted hemisphere)."""
+        return pdf_cosine(wi)
 
     def uniforms(self) -> dict[str, object]:
         """Values of the GLSL uniforms declared in ``glsl`` (names as in the shader)."""
@@ -34,6 +69,10 @@ class Material(BaseModel):
 
     def flags(self) -> dict[str, object]:
         """Compile-time shader flags (``#define``s) this material needs; none by default."""
+        return {}
+
+    def textures(self, ctx) -> dict[str, object]:
+        """GPU textures the GLSL twin samples, by sampler uniform name (e.g. measured tables); none by default."""
         return {}
 
 
@@ -48,8 +87,7 @@ def register_material(cls: type[Material]) -> type[Material]:
     return cls
 
 
-def cos_theta(w: np.ndarray) -> np.ndarray:
-    return w[..., 2]
+# ---------------------------------------------------------------------------------------------- helpers
 
 
 def upper(wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
@@ -57,9 +95,100 @@ def upper(wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
     return ((wo[..., 2] > 0) & (wi[..., 2] > 0))[..., None]
 
 
-Unit = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
-NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
-#: an RGB reflectance in [0, 1] per channel
-Reflectance = tuple[Unit, Unit, Unit]
-#: an RGB scale factor ≥ 0 per channel
-RGB = tuple[NonNeg, NonNeg, NonNeg]
+def normalize(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-300)
+
+
+def reflect(w: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Mirror direction of ``w`` about ``n`` (both pointing away from the surface)."""
+    return 2.0 * np.sum(w * n, axis=-1, keepdims=True) * n - w
+
+
+def sample_cosine(u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
+    """Cosine-weighted hemisphere directions (Malley's method), pdf = cosθ/π."""
+    r = np.sqrt(u1)
+    phi = 2.0 * np.pi * u2
+    return np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(0.0, 1.0 - u1))], axis=-1)
+
+
+def pdf_cosine(wi: np.ndarray) -> np.ndarray:
+    return np.maximum(wi[..., 2], 0.0) / np.pi
+
+
+def sample_power_cosine(axis: np.ndarray, exponent, u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
+    """Directions around unit ``axis`` with density (e + 1)/(2π) cos^e α over the sphere (Phong lobes)."""
+    cos_a = np.power(1.0 - u1, 1.0 / (np.asarray(exponent, dtype=np.float64) + 1.0))
+    sin_a = np.sqrt(np.maximum(0.0, 1.0 - cos_a * cos_a))
+    phi = 2.0 * np.pi * u2
+    local = np.stack([sin_a * np.cos(phi), sin_a * np.sin(phi), cos_a], axis=-1)
+    t, b = orthonormal_basis(axis)
+    return local[..., :1] * t + local[..., 1:2] * b + local[..., 2:3] * axis
+
+
+def pdf_power_cosine(axis: np.ndarray, exponent, w: np.ndarray) -> np.ndarray:
+    cos_a = np.maximum(np.sum(axis * w, axis=-1), 0.0)
+    e = np.asarray(exponent, dtype=np.float64)
+    return (e + 1.0) / (2.0 * np.pi) * cos_a**e
+
+
+def orthonormal_basis(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors completing ``n`` to a right-handed frame (Duff et al. 2017, branchless)."""
+    sign = np.where(n[..., 2] >= 0.0, 1.0, -1.0)
+    a = -1.0 / (sign + n[..., 2])
+    b = n[..., 0] * n[..., 1] * a
+    t = np.stack([1.0 + sign * n[..., 0] ** 2 * a, sign * b, -sign * n[..., 0]], axis=-1)
+    s = np.stack([b, sign + n[..., 1] ** 2 * a, -n[..., 1]], axis=-1)
+    return t, s
+
+
+def sample_half_vector_pdf_to_wi(pdf_h: np.ndarray, wo: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Change of variables from a half-vector density to the reflected direction: p(wi) = p(h) / (4 |wo·h|)."""
+    return pdf_h / np.maximum(4.0 * np.abs(np.sum(wo * h, axis=-1)), 1e-300)
+
+
+def mix_pdf(weights: list[float], pdfs: list[np.ndarray]) -> np.ndarray:
+    """Density of a one-sample mixture of strategies chosen with probabilities ∝ ``weights``."""
+    total = float(sum(weights))
+    return sum(w / total * p for w, p in zip(weights, pdfs, strict=True))
+
+
+def sample_mixture(weights: list[float], samplers: list, u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
+    """Pick strategy k with probability ``weights[k]`` using ``u1`` (then re-stretched to [0, 1)), and draw
+    wi with ``samplers[k](u1', u2)``. The caller's ``pdf`` must be :func:`mix_pdf` of the strategies."""
+    u1 = np.asarray(u1, dtype=np.float64)
+    cdf = np.cumsum(weights)
+    cdf = cdf / cdf[-1]
+    k = np.minimum(np.searchsorted(cdf, u1, side="right"), len(weights) - 1)
+    lo = np.where(k > 0, cdf[np.maximum(k - 1, 0)], 0.0)
+    width = np.maximum(cdf[k] - lo, 1e-300)
+    u1s = np.clip((u1 - lo) / width, 0.0, np.nextafter(1.0, 0.0))
+    out = np.zeros(np.shape(u1) + (3,))
+    for index, sampler in enumerate(samplers):
+        chosen = k == index
+        if np.any(chosen):
+            out[chosen] = sampler(u1s[chosen], np.asarray(u2)[chosen], chosen)
+    return out
+
+
+FAILED = np.array([0.0, 0.0, -1.0])  # where a failed sample points (below the surface, f = 0)
+
+
+def finish_sample(material: Material, wo: np.ndarray, wi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(wi, pdf) for ``sample``: directions a strategy marked failed with NaN become :data:`FAILED` with
+    pdf 0; all others get ``material.pdf(wo, wi)`` (the full mixture density)."""
+    failed = np.isnan(wi[..., 0])
+    wi = np.where(failed[..., None], FAILED, wi)
+    return wi, np.where(failed, 0.0, material.pdf(wo, wi))
+
+
+def reflect_or_fail(wo: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Mirror ``wo`` about half vectors ``h``; NaN (failed) where h faces away from wo (wo·h ≤ 0), since the
+    density change p(wi) = p(h)/(4 wo·h) only holds for the half vector of wo and wi."""
+    wi = reflect(wo, h)
+    return np.where((np.sum(wo * h, axis=-1) > 0)[..., None], wi, np.nan)
+
+
+def luminance(rgb) -> float:
+    """Rec. 709 luminance of an RGB triple (used to weight sampling strategies)."""
+    r, g, b = rgb
+    return 0.2126 * r + 0.7152 * g + 0.0722 * b

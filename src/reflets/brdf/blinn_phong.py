@@ -7,7 +7,25 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from .base import Material, Reflectance, register_material, upper
+from .base import (
+    Material,
+    Reflectance,
+    luminance,
+    mix_pdf,
+    normalize,
+    pdf_cosine,
+    pdf_power_cosine,
+    finish_sample,
+    reflect_or_fail,
+    register_material,
+    sample_cosine,
+    sample_half_vector_pdf_to_wi,
+    sample_mixture,
+    sample_power_cosine,
+    upper,
+)
+
+_Z = np.array([0.0, 0.0, 1.0])
 
 
 def normalization(e: float) -> float:
@@ -55,6 +73,33 @@ class BlinnPhong(Material):
             spec = lobe / np.maximum(wi[..., 2:3], 1e-300)
         f = np.asarray(self.kd) / np.pi + np.asarray(self.ks) * spec
         return np.where(upper(wo, wi), f, 0.0)
+
+    @property
+    def reciprocal(self) -> bool:
+        return self.normalized  # the document's 1/(n·wi) factor breaks reciprocity
+
+    @property
+    def energy_conserving(self) -> bool:
+        return self.normalized and all(d + s <= 1.0 for d, s in zip(self.kd, self.ks, strict=True))
+
+    def _weights(self) -> list[float]:
+        d, s = luminance(self.kd), luminance(self.ks)
+        return [d, s] if d + s > 0 else [1.0, 0.0]
+
+    def sample(self, wo: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Mixture of cosine sampling (diffuse) and half vectors with density (e + 1)/(2π) cos^e θ_h."""
+        wo = np.broadcast_to(np.asarray(wo, dtype=np.float64), np.shape(u1) + (3,))
+
+        def lobe(a, b, chosen):
+            return reflect_or_fail(wo[chosen], sample_power_cosine(_Z, self.exponent, a, b))
+
+        wi = sample_mixture(self._weights(), [lambda a, b, _: sample_cosine(a, b), lobe], u1, u2)
+        return finish_sample(self, wo, wi)
+
+    def pdf(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        h = normalize(np.asarray(wo, dtype=np.float64) + wi)
+        lobe = sample_half_vector_pdf_to_wi(pdf_power_cosine(_Z, self.exponent, h), wo, h)
+        return mix_pdf(self._weights(), [pdf_cosine(wi), lobe])
 
     def uniforms(self) -> dict[str, object]:
         return {

@@ -23,7 +23,11 @@ def eval_glsl(material: Material, wo: np.ndarray, wi: np.ndarray, ctx=None) -> n
     try:
         for binding, buf in enumerate(buffers):
             buf.bind_to_storage_buffer(binding)
-        set_uniforms(program, {**material.uniforms(), "u_count": count})
+        samplers = {}
+        for unit, (uniform, texture) in enumerate(material.textures(ctx).items()):
+            texture.use(unit)
+            samplers[uniform] = unit
+        set_uniforms(program, {**material.uniforms(), **samplers, "u_count": count})
         program.run(group_x=(count + 63) // 64)
         out = np.frombuffer(buffers[2].read(), dtype=np.float32).reshape(-1, 4)[:count, :3]
     finally:

@@ -126,7 +126,7 @@ class Forward(Technique):
                 skip_errors=True,
             )
             self._objects += [vbo, ibo, vao]
-            self._draws.append((program, vao, material.uniforms()))
+            self._draws.append((program, vao, material.uniforms(), material.textures(ctx)))
 
         points_l, dirs, area, emitters = [], [], [], []
         for light in scene.light:
@@ -213,7 +213,12 @@ class Forward(Technique):
                 for i, buf in enumerate(self._light_buffers):
                     buf.bind_to_storage_buffer(i)
                 eye = tuple(float(c) for c in self.scene.camera.position)
-                for program, vao, uniforms in self._draws:
+                for program, vao, uniforms, textures in self._draws:
+                    samplers = {}
+                    for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
+                        texture.use(unit)
+                        samplers[name] = unit
+                    uniforms = {**uniforms, **samplers}
                     set_uniforms(program, {"u_view_proj": vp_bytes, "u_eye": eye, **self._light_counts, **uniforms})
                     vao.render()
                 emitter_program = get_program(ctx, EMITTER_PROGRAM)
