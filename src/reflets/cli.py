@@ -59,6 +59,33 @@ def cmd_render(args) -> int:
     return 0
 
 
+def cmd_reference(args) -> int:
+    from .api import as_scene
+    from .imageio import check_output_path, write_image
+    from .reference import reference
+
+    out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".ref.exr")
+    check_output_path(out, (".exr", ".npy"))
+    stderr_path = out.with_name(out.stem + ".stderr" + out.suffix)
+    size = _size(args.size) if args.size else None
+    result = reference(as_scene(args.scene), spp=args.spp, seed=args.seed, engine=args.engine,
+                       visibility=args.visibility == "on", size=size, pixel=args.pixel, heuristic=args.mis,
+                       progress=not args.quiet)
+    write_image(out, result.image)
+    if result.engine == "numpy":
+        write_image(stderr_path, result.stderr)
+    print(f"wrote {out}" + (f" and {stderr_path}" if result.engine == "numpy" else "")
+          + f" ({result.spp} spp, {result.seconds:.1f} s, {result.samples_per_second / 1e6:.2f} M samples/s)")
+    return 0
+
+
+def cmd_bench(args) -> int:
+    from .bench import run_suite
+
+    run_suite(args.suite, Path(args.output), quick=args.quick)
+    return 0
+
+
 def cmd_compare(args) -> int:
     from .api import compare
     from .imageio import check_output_path, read_image
@@ -163,6 +190,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--exposure", type=float, default=0.0, help="PNG only: exposure in stops (default 0)")
     p.add_argument("--tonemap", choices=["srgb", "aces"], default="srgb", help="PNG only: tone curve")
     p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
+    p.add_argument("scene", help="scene file (.toml)")
+    p.add_argument("-o", "--output", help="output image (.exr or .npy); the standard error goes to NAME.stderr.exr")
+    p.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--engine", choices=["numpy", "mitsuba"], default="numpy")
+    p.add_argument("--visibility", choices=["on", "off"], default="on", help="shadows (default on)")
+    p.add_argument("--pixel", choices=["center", "box"], default="center",
+                   help="sample pixel centres like the GPU (default) or average over the pixel")
+    p.add_argument("--mis", choices=["power", "balance"], default="power", help="MIS heuristic (default power)")
+    p.add_argument("--size", help="WIDTHxHEIGHT, overrides the camera's size")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_reference)
+
+    p = sub.add_parser("bench", help="run a benchmark suite and write benchmarks/results/SUITE.{json,md}")
+    p.add_argument("suite", help="suite name (reference)")
+    p.add_argument("-o", "--output", default="benchmarks/results", help="results folder (default benchmarks/results)")
+    p.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke test")
+    p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("compare", help="error metrics of TEST against REFERENCE")
     p.add_argument("test")

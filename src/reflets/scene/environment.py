@@ -64,3 +64,28 @@ def environment_grid(image: np.ndarray, light: EnvironmentLight, grid: tuple[int
     centroid /= np.maximum(np.linalg.norm(centroid, axis=-1, keepdims=True), 1e-30)
     world = centroid.reshape(-1, 3) @ rotation_y(light.rotate_y).T
     return world.astype(np.float32), power.reshape(-1, 3).astype(np.float32)
+
+
+def equirect_uv(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(u, v) of directions in the environment's frame (Mitsuba 3 layout; same as ``equirect_uv`` in GLSL)."""
+    u = np.arctan2(d[..., 0], -d[..., 2]) / (2.0 * np.pi)
+    return u - np.floor(u), np.arccos(np.clip(d[..., 1], -1.0, 1.0)) / np.pi
+
+
+def lookup(image: np.ndarray, light: EnvironmentLight, world_dirs: np.ndarray) -> np.ndarray:
+    """Radiance of the map along world directions, bilinear like the GPU's LINEAR sampler (texel centres at
+    (i + ½)/size, u wraps, v clamps)."""
+    local = world_dirs @ rotation_y(light.rotate_y)  # = R^T d for row vectors
+    u, v = equirect_uv(local)
+    h, w, _ = image.shape
+    x = u * w - 0.5
+    y = np.clip(v * h - 0.5, 0.0, h - 1.0)
+    x0 = np.floor(x).astype(np.int64)
+    y0 = np.minimum(np.floor(y).astype(np.int64), max(h - 2, 0))
+    fx, fy = (x - x0)[..., None], (y - y0)[..., None]
+    x0w, x1w = x0 % w, (x0 + 1) % w
+    y1 = np.minimum(y0 + 1, h - 1)
+    img = image.astype(np.float64)
+    top = img[y0, x0w] * (1 - fx) + img[y0, x1w] * fx
+    bottom = img[y1, x0w] * (1 - fx) + img[y1, x1w] * fx
+    return top * (1 - fy) + bottom * fy

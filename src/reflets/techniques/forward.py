@@ -207,7 +207,8 @@ class Forward(Technique):
         try:
             with self.timer.frame():
                 target.use()
-                self._draw_background(view_proj)
+                if self.params.output == "radiance":  # AOVs keep 0 where no surface is seen
+                    self._draw_background(view_proj)
                 ctx.enable(ctx.DEPTH_TEST)
                 ctx.disable(ctx.CULL_FACE)
                 for i, buf in enumerate(self._light_buffers):
@@ -222,7 +223,7 @@ class Forward(Technique):
                     set_uniforms(program, {"u_view_proj": vp_bytes, "u_eye": eye, **self._light_counts, **uniforms})
                     vao.render()
                 emitter_program = get_program(ctx, EMITTER_PROGRAM)
-                for vao, light in self._emitters:
+                for vao, light in self._emitters if self.params.output == "radiance" else []:
                     set_uniforms(
                         emitter_program,
                         {

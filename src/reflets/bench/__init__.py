@@ -1,0 +1,55 @@
+"""Benchmark suites behind `reflets bench SUITE`; each writes SUITE.json and SUITE.md into a results folder."""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+from collections.abc import Callable
+from pathlib import Path
+
+from ..errors import ArgumentError, OutputError
+
+#: suite name → function(quick: bool) -> (results dict, markdown text)
+SUITES: dict[str, Callable[[bool], tuple[dict, str]]] = {}
+
+
+def register_suite(name: str):
+    def wrap(fn):
+        if name in SUITES:
+            raise ValueError(f"benchmark suite '{name}' is registered twice")
+        SUITES[name] = fn
+        return fn
+
+    return wrap
+
+
+def machine() -> dict:
+    """What the numbers were measured on (written into every report)."""
+    info = {"python": platform.python_version(), "platform": platform.platform(), "cpu": platform.processor(),
+            "cores": os.cpu_count()}
+    try:
+        from ..gpu import gl_info
+
+        info["opengl"] = gl_info()
+    except Exception as exc:  # noqa: BLE001 - a CPU-only benchmark still runs without GL
+        info["opengl"] = {"error": str(exc)}
+    return info
+
+
+def run_suite(name: str, out_dir: Path, quick: bool = False) -> dict:
+    from . import reference  # noqa: F401  (registers its suite)
+
+    if name not in SUITES:
+        raise ArgumentError(f"unknown suite '{name}'; allowed: {', '.join(sorted(SUITES))}", field="suite")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create the results folder ({exc.strerror})", file=out_dir) from None
+    results, markdown = SUITES[name](quick)
+    results = {"suite": name, "quick": quick, "machine": machine(), **results}
+    (out_dir / f"{name}.json").write_text(json.dumps(results, indent=2))
+    (out_dir / f"{name}.md").write_text(markdown)
+    print(markdown)
+    print(f"wrote {out_dir / (name + '.json')} and {out_dir / (name + '.md')}")
+    return results

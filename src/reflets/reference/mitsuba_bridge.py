@@ -1,0 +1,402 @@
+"""Mitsuba 3 as an independent reference: a reflets :class:`~reflets.scene.model.Scene` as a Mitsuba scene.
+
+:func:`to_mitsuba_dict` turns a validated scene into the dict :func:`mitsuba.load_dict` reads, and
+:func:`render_mitsuba` renders it with Mitsuba's ``direct`` integrator (multiple importance sampling of
+emitter and BSDF sampling, one bounce: the same light transport as the real-time techniques, which cast
+no indirect light). Mitsuba runs in its ``scalar_rgb`` variant (CPU, no JIT), so the radiance it returns
+is linear RGB, directly comparable with the GPU images.
+
+Conventions (each checked by ``tests/reference/test_mitsuba_bridge.py``):
+
+* **Camera.** ``perspective`` sensor, ``fov = fov_y`` on ``fov_axis = "y"``, ``to_world`` = Mitsuba's
+  look-at (local +z forward, +x left, +y up) built from ``position``, ``look_at`` and ``up``. Row 0 of the
+  image is the top; a world point lands on the pixel :func:`reflets.scene.camera.project` gives.
+* **Pixels.** ``hdrfilm`` with a ``box`` reconstruction filter: each pixel is the mean radiance over the
+  pixel's square (uniform jitter), not the value at its centre. Compare with references averaged over
+  sub-pixel positions (e.g. ``pixel_rays(..., offsets=...)``), or on smooth regions only.
+* **Meshes.** The world-space triangles of :func:`reflets.scene.geometry.mesh_data` are written to binary
+  PLY files (positions, vertex normals, uv) and loaded with ``face_normals = False``, so Mitsuba shades
+  with our interpolated normals. Every BSDF is wrapped in ``twosided``: surfaces are shaded on the side
+  the camera sees, as in the real-time renderer.
+* **Materials.** ``lambert`` → ``diffuse``; ``microfacet`` with ``fresnel`` none / dielectric / conductor,
+  separable masking and no diffuse term → ``roughconductor`` (``alpha_u`` along the surface tangent
+  ∂p/∂u, ``sample_visible``; fresnel none → ``material = "none"``, F = 1; dielectric → real ``eta``,
+  ``k = 0``). Anything else raises :class:`~reflets.errors.SceneError`.
+* **Lights.** ``point`` → ``point`` (intensity, W/sr); ``directional`` → ``directional`` (Mitsuba's
+  ``direction`` is also the way the light travels); ``quad`` → ``rectangle`` (a two-triangle mesh when
+  the parallelogram is not a rectangle: Mitsuba's rectangle must not be sheared) with an ``area``
+  emitter on the side of normalize((c2 − c1) × (c4 − c1)); ``polygon`` → a triangle-fan mesh with an
+  ``area`` emitter. ``two_sided`` adds a flipped copy 10⁻⁴ × the light's size behind the first, so each
+  copy is hit only from its emitting side (coplanar copies would hide each other at random).
+  ``environment`` → ``envmap`` from an EXR written in ``workdir`` (the image already multiplied by
+  ``scale``), ``to_world`` = rotation by ``rotate_y`` about +y.
+* **Environment texels.** Mitsuba's ``envmap`` places texel column k at u = (k + ½)/W (as we do) but row k
+  at v = k/(H − 1), while we read the image like a GL texture: bilinear between texel centres
+  ((k + ½)/W, (k + ½)/H), wrapping in u, clamped in v. The EXR handed to Mitsuba therefore has 2H + 1 rows
+  (texel centres on odd rows, midpoints of neighbours on even rows, the edge rows repeated at the poles),
+  with which Mitsuba's bilinear lookup equals ours exactly.
+* **Background.** A constant ``background`` colour (not black, no environment light) is what camera rays
+  that miss see; it lights nothing. :func:`render_mitsuba` reproduces that exactly: it renders an RGBA
+  film and composites ``rgb + (1 − alpha) · background``. :func:`to_mitsuba_dict` can instead add a
+  ``constant`` emitter (``background="emitter"``, the default, for a self-contained Mitsuba scene), which
+  also *illuminates* the scene — not what the real-time renderer does. With an environment light the
+  environment is always what misses see, even when ``background`` is an explicit colour (a limitation).
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ArgumentError, RefletsError, SceneError
+from ..scene.geometry import clip_planes, mesh_data
+from ..scene.model import (
+    DirectionalLight,
+    EnvironmentLight,
+    PointLight,
+    PolygonLight,
+    QuadLight,
+    Scene,
+)
+
+#: the Mitsuba variant used (the CPU scalar one runs everywhere the wheel installs)
+VARIANT = "scalar_rgb"
+#: reconstruction filters accepted by :func:`to_mitsuba_dict`
+PIXEL_FILTERS = ("box", "tent", "gaussian")
+#: relative offset of the flipped copy of a two-sided area light (times the light's largest edge)
+TWO_SIDED_GAP = 1e-4
+
+_SUPPORTED = "supported: lambert; microfacet with fresnel none/dielectric/conductor, separable masking, diffuse 0"
+
+
+class MitsubaUnavailableError(RefletsError):
+    """Mitsuba 3 (the optional reference renderer) is not installed or cannot be imported."""
+
+
+def mitsuba_module():
+    """The ``mitsuba`` module with the :data:`VARIANT` variant set (set once, only if it is not already)."""
+    try:
+        import mitsuba as mi
+    except ImportError as exc:
+        raise MitsubaUnavailableError(
+            f"Mitsuba 3 is not available ({exc}); install the [reference] extra: pip install 'reflets[reference]'"
+        ) from None
+    if mi.variant() != VARIANT:
+        mi.set_variant(VARIANT)
+    return mi
+
+
+# --------------------------------------------------------------------------------------------- helpers
+
+
+def _rgb(value) -> dict[str, Any]:
+    return {"type": "rgb", "value": [float(v) for v in np.broadcast_to(np.asarray(value, dtype=np.float64), (3,))]}
+
+
+def _transform(matrix: np.ndarray):
+    mi = mitsuba_module()
+    return mi.ScalarTransform4f(np.asarray(matrix, dtype=np.float64).tolist())
+
+
+def look_at_matrix(position, target, up) -> np.ndarray:
+    """Mitsuba's camera-to-world look-at: columns left, up, forward (local +z), origin."""
+    origin = np.asarray(position, dtype=np.float64)
+    forward = np.asarray(target, dtype=np.float64) - origin
+    forward /= np.linalg.norm(forward)
+    left = np.cross(np.asarray(up, dtype=np.float64), forward)
+    left /= np.linalg.norm(left)
+    new_up = np.cross(forward, left)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = left, new_up, forward, origin
+    return m
+
+
+def write_ply(path: Path, positions: np.ndarray, indices: np.ndarray, normals=None, uvs=None) -> Path:
+    """A binary little-endian PLY triangle mesh (float32 vertices, optional normals and uv)."""
+    names = ["x", "y", "z"] + (["nx", "ny", "nz"] if normals is not None else []) + (["u", "v"] if uvs is not None else [])
+    columns = [positions] + ([normals] if normals is not None else []) + ([uvs] if uvs is not None else [])
+    vertex = np.ascontiguousarray(np.concatenate(columns, axis=1), dtype="<f4")
+    faces = np.zeros(len(indices), dtype=[("n", "u1"), ("i", "<u4", (3,))])
+    faces["n"] = 3
+    faces["i"] = indices
+    header = (
+        "ply\nformat binary_little_endian 1.0\n"
+        f"element vertex {len(vertex)}\n"
+        + "".join(f"property float {n}\n" for n in names)
+        + f"element face {len(faces)}\nproperty list uchar uint vertex_indices\nend_header\n"
+    )
+    path.write_bytes(header.encode("ascii") + vertex.tobytes() + faces.tobytes())
+    return path
+
+
+def _unsupported(name: str, kind: str, why: str) -> SceneError:
+    return SceneError(
+        f"material '{name}' (type {kind}): {why}; the Mitsuba bridge does not support it ({_SUPPORTED})",
+        field=f"materials.{name}",
+    )
+
+
+def material_to_mitsuba(name: str, material) -> dict[str, Any]:
+    """The Mitsuba BSDF dict (wrapped in ``twosided``) of one reflets material, or :class:`SceneError`."""
+    kind = getattr(material, "type", type(material).__name__)
+    if kind == "lambert":
+        inner = {"type": "diffuse", "reflectance": _rgb(material.albedo)}
+    elif kind == "microfacet":
+        inner = _microfacet_to_mitsuba(name, material)
+    else:
+        raise _unsupported(name, kind, "no matching Mitsuba BSDF")
+    return {"type": "twosided", "bsdf": inner}
+
+
+def _microfacet_to_mitsuba(name: str, material) -> dict[str, Any]:
+    distribution = getattr(material, "distribution", "ggx")
+    fresnel = getattr(material, "fresnel", "none")
+    masking = getattr(material, "masking", "separable")
+    diffuse = np.asarray(getattr(material, "diffuse", (0.0, 0.0, 0.0)), dtype=np.float64)
+    if distribution not in ("ggx", "beckmann"):
+        raise _unsupported(name, "microfacet", f"distribution '{distribution}'")
+    if masking != "separable":
+        raise _unsupported(name, "microfacet", f"masking '{masking}' (Mitsuba uses the separable Smith form)")
+    if np.any(diffuse > 0):
+        raise _unsupported(name, "microfacet", "a diffuse term > 0")
+    alpha = np.broadcast_to(np.asarray(material.alpha, dtype=np.float64), (2,))
+    out: dict[str, Any] = {
+        "type": "roughconductor",
+        "distribution": distribution,
+        "alpha_u": float(alpha[0]),
+        "alpha_v": float(alpha[1]),
+        "sample_visible": True,
+        "specular_reflectance": _rgb(getattr(material, "specular", (1.0, 1.0, 1.0))),
+    }
+    if fresnel == "none":
+        out["material"] = "none"
+    elif fresnel == "conductor":
+        out["eta"] = _rgb(material.eta)
+        out["k"] = _rgb(material.k)
+    elif fresnel == "dielectric":
+        out["eta"] = _rgb(material.eta)
+        out["k"] = _rgb(0.0)
+    else:
+        raise _unsupported(name, "microfacet", f"fresnel '{fresnel}'")
+    return out
+
+
+def _area_emitter(radiance) -> dict[str, Any]:
+    return {"type": "area", "radiance": _rgb(radiance)}
+
+
+def _is_rectangle(e1: np.ndarray, e2: np.ndarray) -> bool:
+    return abs(float(e1 @ e2)) <= 1e-6 * float(np.linalg.norm(e1) * np.linalg.norm(e2))
+
+
+def _quad_shapes(light: QuadLight, workdir: Path, stem: str) -> dict[str, dict[str, Any]]:
+    p = light.polygon()
+    e1, e2 = p[1] - p[0], p[3] - p[0]
+    normal = np.cross(e1, e2)
+    normal /= np.linalg.norm(normal)
+    if not _is_rectangle(e1, e2):
+        return _polygon_shapes(p, light.radiance, light.two_sided, workdir, stem)
+    centre = p[0] + 0.5 * (e1 + e2)
+    gap = TWO_SIDED_GAP * max(np.linalg.norm(e1), np.linalg.norm(e2))
+    shapes = {}
+    sides = [(e1, e2, normal, centre)]
+    if light.two_sided:  # swapped axes → normal −n, shifted behind the first copy
+        sides.append((e2, e1, -normal, centre - gap * normal))
+    for k, (a, b, n, c) in enumerate(sides):
+        m = np.eye(4)
+        m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = 0.5 * a, 0.5 * b, n, c
+        shapes[f"{stem}_{k}"] = {"type": "rectangle", "to_world": _transform(m), "emitter": _area_emitter(light.radiance)}
+    return shapes
+
+
+def _polygon_shapes(points: np.ndarray, radiance, two_sided: bool, workdir: Path, stem: str) -> dict[str, dict]:
+    points = np.asarray(points, dtype=np.float64)
+    fan = np.array([[0, i, i + 1] for i in range(1, len(points) - 1)], dtype=np.uint32)
+    normal = np.sum(np.cross(points, np.roll(points, -1, axis=0)), axis=0)  # Newell: CCW seen from the lit side
+    normal /= np.linalg.norm(normal)
+    size = float(np.max(np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)))
+    variants = [(points, fan)]
+    if two_sided:
+        variants.append((points - TWO_SIDED_GAP * size * normal, fan[:, ::-1]))
+    shapes = {}
+    for k, (pts, tri) in enumerate(variants):
+        path = write_ply(workdir / f"{stem}_{k}.ply", pts.astype(np.float32), tri)
+        shapes[f"{stem}_{k}"] = {
+            "type": "ply",
+            "filename": str(path),
+            "face_normals": True,
+            "emitter": _area_emitter(radiance),
+        }
+    return shapes
+
+
+def environment_for_mitsuba(image: np.ndarray) -> np.ndarray:
+    """The (2H + 1, W, 3) image whose Mitsuba ``envmap`` lookup equals a bilinear lookup of ``image`` between
+    texel centres ((k + ½)/W, (k + ½)/H), wrapping in u and clamping in v (see the module docstring)."""
+    image = np.asarray(image, dtype=np.float32)
+    h = image.shape[0]
+    out = np.empty((2 * h + 1,) + image.shape[1:], dtype=np.float32)
+    out[1::2] = image
+    out[2:-1:2] = 0.5 * (image[:-1] + image[1:])
+    out[0], out[-1] = image[0], image[-1]
+    return out
+
+
+def _environment_emitter(scene: Scene, light: EnvironmentLight, workdir: Path) -> dict[str, Any]:
+    from ..imageio import write_image
+    from ..scene.environment import load_environment, rotation_y
+
+    image = load_environment(scene)
+    path = write_image(workdir / "environment.exr", environment_for_mitsuba(image))
+    m = np.eye(4)
+    m[:3, :3] = rotation_y(light.rotate_y)
+    return {"type": "envmap", "filename": str(path), "scale": 1.0, "to_world": _transform(m)}
+
+
+def _scene_points(scene: Scene, meshes: list[np.ndarray]) -> np.ndarray:
+    pts = list(meshes)
+    for light in scene.light:
+        if isinstance(light, PointLight):
+            pts.append(np.asarray([light.position], dtype=np.float64))
+        elif isinstance(light, (QuadLight, PolygonLight)):
+            pts.append(light.polygon())
+    return np.concatenate(pts, axis=0) if pts else np.zeros((0, 3))
+
+
+# ------------------------------------------------------------------------------------------------- API
+
+
+def to_mitsuba_dict(
+    scene: Scene,
+    workdir: Path,
+    size: tuple[int, int] | None = None,
+    spp: int = 64,
+    seed: int = 0,
+    pixel_filter: str = "box",
+    *,
+    background: str = "emitter",
+) -> dict[str, Any]:
+    """The scene as a :func:`mitsuba.load_dict` dict; mesh and environment files are written to ``workdir``.
+
+    Parameters
+    ----------
+    scene : Scene
+    workdir : Path
+        An existing folder for the PLY and EXR files the dict refers to (keep it until the scene is loaded).
+    size : (width, height), optional
+        Image size; the camera's by default.
+    spp : int
+        Samples per pixel (``independent`` sampler).
+    seed : int
+        Sampler seed.
+    pixel_filter : {"box", "tent", "gaussian"}
+        Mitsuba reconstruction filter; ``box`` (the default) averages radiance over each pixel's square.
+    background : {"emitter", "alpha", "none"}
+        How a non-black constant ``background`` colour (scenes without an environment light) is handled:
+        ``"emitter"`` adds a ``constant`` emitter (it also lights the scene); ``"alpha"`` uses an RGBA film
+        for compositing afterwards (what :func:`render_mitsuba` does); ``"none"`` ignores it.
+
+    Raises
+    ------
+    SceneError
+        A material the bridge cannot express in Mitsuba (one line naming it).
+    ArgumentError
+        A bad size, spp, seed, filter or background mode.
+    """
+    mi = mitsuba_module()
+    width, height = _check_size(size or scene.camera.size)
+    if not (isinstance(spp, int | np.integer) and 1 <= spp <= 1 << 20):
+        raise ArgumentError(f"spp must be an integer in [1, {1 << 20}], got {spp!r}")
+    if not (isinstance(seed, int | np.integer) and 0 <= seed < 1 << 32):
+        raise ArgumentError(f"seed must be an integer in [0, 2^32), got {seed!r}")
+    if pixel_filter not in PIXEL_FILTERS:
+        raise ArgumentError(f"pixel_filter must be one of {', '.join(PIXEL_FILTERS)}, got {pixel_filter!r}")
+    if background not in ("emitter", "alpha", "none"):
+        raise ArgumentError(f"background must be 'emitter', 'alpha' or 'none', got {background!r}")
+    workdir = Path(workdir)
+
+    # Materials first, so an unsupported one fails before any file is written.
+    bsdfs = {name: material_to_mitsuba(name, scene.materials[name]) for name in {m.material for m in scene.mesh}}
+
+    out: dict[str, Any] = {"type": "scene", "integrator": {"type": "direct", "hide_emitters": False}}
+    positions = []
+    for i, mesh in enumerate(scene.mesh):
+        data = mesh_data(scene, i)
+        positions.append(data.positions.astype(np.float64))
+        path = write_ply(workdir / f"mesh_{i}.ply", data.positions, data.indices, data.normals, data.uvs)
+        out[f"mesh_{i}"] = {"type": "ply", "filename": str(path), "face_normals": False, "bsdf": bsdfs[mesh.material]}
+
+    for i, light in enumerate(scene.light):
+        if isinstance(light, PointLight):
+            out[f"light_{i}"] = {"type": "point", "position": list(light.position), "intensity": _rgb(light.intensity)}
+        elif isinstance(light, DirectionalLight):
+            out[f"light_{i}"] = {
+                "type": "directional",
+                "direction": list(light.direction),
+                "irradiance": _rgb(light.irradiance),
+            }
+        elif isinstance(light, QuadLight):
+            out.update(_quad_shapes(light, workdir, f"light_{i}"))
+        elif isinstance(light, PolygonLight):
+            out.update(_polygon_shapes(light.polygon(), light.radiance, light.two_sided, workdir, f"light_{i}"))
+        elif isinstance(light, EnvironmentLight):
+            out[f"light_{i}"] = _environment_emitter(scene, light, workdir)
+
+    color = scene.background_color()
+    alpha = False
+    if scene.environment is None and color is not None and any(c > 0 for c in color):
+        if background == "emitter":
+            out["background"] = {"type": "constant", "radiance": _rgb(color)}
+        alpha = background == "alpha"
+
+    cam = scene.camera
+    near, far = clip_planes(np.asarray(cam.position, dtype=np.float64), _scene_points(scene, positions))
+    out["sensor"] = {
+        "type": "perspective",
+        "fov": float(cam.fov_y),
+        "fov_axis": "y",
+        "near_clip": float(near),
+        "far_clip": float(max(2.0 * far, 10.0 * near)),
+        "to_world": _transform(look_at_matrix(cam.position, cam.look_at, cam.up)),
+        "film": {
+            "type": "hdrfilm",
+            "width": width,
+            "height": height,
+            "rfilter": {"type": pixel_filter},
+            "pixel_format": "rgba" if alpha else "rgb",
+            "component_format": "float32",
+        },
+        "sampler": {"type": "independent", "sample_count": int(spp), "seed": int(seed)},
+    }
+    del mi
+    return out
+
+
+def _check_size(size) -> tuple[int, int]:
+    try:
+        width, height = (int(v) for v in size)
+    except (TypeError, ValueError):
+        raise ArgumentError(f"size must be (width, height), got {size!r}") from None
+    if not (1 <= width <= 16384 and 1 <= height <= 16384):
+        raise ArgumentError(f"size must be (width, height) with each in [1, 16384], got {size!r}")
+    return width, height
+
+
+def render_mitsuba(scene: Scene, spp: int = 64, seed: int = 0, size: tuple[int, int] | None = None) -> np.ndarray:
+    """Render ``scene`` with Mitsuba 3 (``direct`` integrator, box pixel filter): float32 (H, W, 3), row 0 top.
+
+    A constant background colour is composited through the film's alpha (it is seen, it does not light).
+    Raises :class:`MitsubaUnavailableError` without Mitsuba, :class:`SceneError` for unsupported materials.
+    """
+    mi = mitsuba_module()
+    with tempfile.TemporaryDirectory(prefix="reflets-mitsuba-") as tmp:
+        spec = to_mitsuba_dict(scene, Path(tmp), size=size, spp=spp, seed=seed, background="alpha")
+        mi_scene = mi.load_dict(spec)
+        image = np.array(mi.render(mi_scene, spp=int(spp), seed=int(seed)), dtype=np.float32)
+    if image.shape[-1] == 4:
+        color = np.asarray(scene.background_color(), dtype=np.float32)
+        image = image[..., :3] + (1.0 - image[..., 3:4]) * color
+    return np.ascontiguousarray(image[..., :3], dtype=np.float32)
