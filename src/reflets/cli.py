@@ -94,6 +94,12 @@ def cmd_compare(args) -> int:
         check_output_path(Path(args.diff), (".png",))
     a, b = read_image(args.test), read_image(args.reference)
     result = compare(a, b)
+    ref = Path(args.reference)
+    stderr_path = Path(args.stderr) if args.stderr else ref.with_name(ref.stem + ".stderr" + ref.suffix)
+    if args.stderr or stderr_path.is_file():
+        from .metrics import zscores
+
+        result.update(zscores(a, b, read_image(stderr_path)))
     if args.diff:
         from .imageio import write_png8
         from .metrics import difference_image
@@ -216,6 +222,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("reference")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--diff", metavar="DIFF.png", help="write a false-colour relative-difference image")
+    p.add_argument("--stderr", metavar="STDERR.exr",
+                   help="reference's per-pixel standard error (default: REFERENCE.stderr.exr if it exists); "
+                   "adds mean_z, mean_abs_z, within_3_stderr")
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("info", help="OpenGL driver, methods and package versions")

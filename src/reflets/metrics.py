@@ -219,3 +219,20 @@ def difference_image(
     lut = matplotlib.colormaps["magma"](np.linspace(0.0, 1.0, 256))[:, :3]
     index = np.round(np.clip(error / norm, 0.0, 1.0) * 255.0).astype(np.intp)
     return np.round(lut[index] * 255.0).astype(np.uint8)
+
+
+def zscores(test: np.ndarray, ref: np.ndarray, stderr: np.ndarray) -> dict[str, float]:
+    """How far ``test`` is from a Monte Carlo ``ref`` in units of the reference's own standard error.
+
+    Over pixels/channels with stderr > 0: mean z (bias), mean |z|, and the fraction within 3 standard errors.
+    A technique indistinguishable from the reference gives mean |z| ≲ 0.8 and ≳ 99 % within 3.
+    """
+    t, r, s = (np.asarray(x, dtype=np.float64) for x in (test, ref, stderr))
+    if not (t.shape == r.shape == s.shape):
+        raise ArgumentError(f"shapes differ: test {t.shape}, reference {r.shape}, stderr {s.shape}", field="stderr")
+    keep = s > 1e-7 * np.maximum(np.abs(r), 1e-30)  # a zero (or rounding-level) error is no Monte Carlo noise
+    if not np.any(keep):
+        return {"mean_z": float("nan"), "mean_abs_z": float("nan"), "within_3_stderr": float("nan")}
+    z = (t[keep] - r[keep]) / s[keep]
+    return {"mean_z": float(z.mean()), "mean_abs_z": float(np.abs(z).mean()),
+            "within_3_stderr": float(np.mean(np.abs(z) <= 3.0))}

@@ -126,3 +126,28 @@ def test_cli_reference_writes_image_and_standard_error(tmp_path, minimal_toml, c
     assert code == 0 and "samples/s" in capsys.readouterr().out
     assert read_image(out).shape == (12, 16, 3)
     assert read_image(tmp_path / "ref.stderr.exr").shape == (12, 16, 3)
+
+
+def test_gpu_environment_lighting_is_within_the_reference_noise(ctx):
+    """The forward renderer's 32×16 distant-light grid vs the importance-sampled reference (diffuse sphere)."""
+    from reflets.demo import scene_path
+    from reflets.metrics import zscores
+
+    scene = reflets.load_scene(scene_path("12_ref_sphere_env.toml"))
+    ref = reference(scene, spp=32, size=(48, 36), progress=False)
+    gpu = reflets.render(scene, size=(48, 36))
+    stats = zscores(gpu, ref.image, ref.stderr)
+    assert abs(stats["mean_z"]) < 0.3 and stats["within_3_stderr"] > 0.99, stats
+
+
+def test_cli_compare_reads_the_reference_standard_error(tmp_path, minimal_toml, capsys):
+    import json
+
+    from reflets.cli import main
+
+    main(["reference", str(minimal_toml), "-o", str(tmp_path / "r.exr"), "--spp", "2", "--size", "16x12", "-q"])
+    main(["render", str(minimal_toml), "-o", str(tmp_path / "g.exr"), "--size", "16x12"])
+    capsys.readouterr()
+    assert main(["compare", str(tmp_path / "g.exr"), str(tmp_path / "r.exr"), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert {"mean_z", "mean_abs_z", "within_3_stderr"} <= set(result)

@@ -306,7 +306,7 @@ def to_mitsuba_dict(
     ArgumentError
         A bad size, spp, seed, filter or background mode.
     """
-    mi = mitsuba_module()
+    mitsuba_module()  # fail early, with the install hint, when Mitsuba is missing
     width, height = _check_size(size or scene.camera.size)
     if not (isinstance(spp, int | np.integer) and 1 <= spp <= 1 << 20):
         raise ArgumentError(f"spp must be an integer in [1, {1 << 20}], got {spp!r}")
@@ -371,7 +371,6 @@ def to_mitsuba_dict(
         },
         "sampler": {"type": "independent", "sample_count": int(spp), "seed": int(seed)},
     }
-    del mi
     return out
 
 

@@ -106,7 +106,9 @@ class MonteCarloReference:
             values = self._pixels(ids, width, height, spp, rng, pixel)  # (P, spp, 3)
             mean[ids] = values.mean(axis=1)
             if spp > 1:
-                err[ids] = values.std(axis=1, ddof=1) / np.sqrt(spp)
+                std = values.std(axis=1, ddof=1)
+                std[std <= 1e-9 * np.abs(mean[ids])] = 0.0  # rounding noise of a deterministic value
+                err[ids] = std / np.sqrt(spp)
             bar.advance()
         bar.close()
         seconds = time.perf_counter() - start
