@@ -9,8 +9,9 @@ from pydantic import Field
 from .base import MATERIALS, Material, register_material
 from .blinn_phong import BlinnPhong
 from .lambert import Lambert
+from .measured import Measured
 
 #: the scene-file form of any registered material, chosen by its ``type`` key
-MaterialSpec = Annotated[Union[Lambert, BlinnPhong], Field(discriminator="type")]  # noqa: UP007
+MaterialSpec = Annotated[Union[Lambert, BlinnPhong, Measured], Field(discriminator="type")]  # noqa: UP007
 
-__all__ = ["MATERIALS", "Material", "MaterialSpec", "register_material", "Lambert", "BlinnPhong"]
+__all__ = ["MATERIALS", "Material", "MaterialSpec", "register_material", "Lambert", "BlinnPhong", "Measured"]

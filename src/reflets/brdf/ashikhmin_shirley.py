@@ -43,6 +43,12 @@ def log_lobe(u: np.ndarray, nu: float, nv: float) -> np.ndarray:
     return 0.5 * (nu * u[..., 0] ** 2 + nv * u[..., 1] ** 2) / n2 * ratio
 
 
+def grazing_falloff(cos: np.ndarray) -> np.ndarray:
+    """1 − (1 − cosθ/2)⁵, expanded as x(5 − 10x + 10x² − 5x³ + x⁴) with x = cosθ/2 (no cancellation at 0)."""
+    x = 0.5 * np.maximum(cos, 0.0)
+    return x * (5.0 + x * (-10.0 + x * (10.0 + x * (-5.0 + x))))
+
+
 @register_material
 class AshikhminShirley(Material):
     """Ashikhmin & Shirley 2000, "An anisotropic Phong BRDF model": Fresnel-weighted anisotropic Phong
@@ -90,15 +96,17 @@ class AshikhminShirley(Material):
         wo = np.asarray(wo, dtype=np.float64)
         wi = np.asarray(wi, dtype=np.float64)
         up = upper(wo, wi)
-        u = wo + wi
-        u = np.where(up, u, [0.0, 0.0, 1.0])  # keep the arithmetic finite below the horizon
-        k_dot_h = 0.5 * np.linalg.norm(u, axis=-1)  # wi·(wo + wi)/|wo + wi| = (1 + wo·wi)/|u| = |u|/2
+        u = np.where(up, wo + wi, [0.0, 0.0, 1.0])  # keep the arithmetic finite below the horizon
+        length = np.linalg.norm(u, axis=-1)
+        k_dot_h = 0.5 * length  # wi·(wo + wi)/|wo + wi| = (1 + wo·wi)/|u| = |u|/2
+        d = wo - wi
+        one_minus_kh = np.sum(d * d, axis=-1) / (2.0 * (2.0 + length))  # 1 − |u|/2 without cancellation
         lobe = np.exp(log_lobe(u, self.nu, self.nv))
         cos_max = np.maximum(np.maximum(wo[..., 2], wi[..., 2]), 1e-300)
         rs = np.asarray(self.rs)
-        fresnel = rs + (1.0 - rs) * ((1.0 - k_dot_h) ** 5)[..., None]
+        fresnel = rs + (1.0 - rs) * (one_minus_kh**5)[..., None]
         spec = (self.norm / (8.0 * np.pi) * lobe / (k_dot_h * cos_max))[..., None] * fresnel
-        falloff = (1.0 - (1.0 - 0.5 * np.maximum(wo[..., 2], 0.0)) ** 5) * (1.0 - (1.0 - 0.5 * np.maximum(wi[..., 2], 0.0)) ** 5)
+        falloff = grazing_falloff(wo[..., 2]) * grazing_falloff(wi[..., 2])
         diffuse = 28.0 / (23.0 * np.pi) * np.asarray(self.rd) * (1.0 - rs) * falloff[..., None]
         return np.where(up, spec + diffuse, 0.0)
 

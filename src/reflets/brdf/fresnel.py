@@ -35,7 +35,7 @@ def fresnel_conductor(cos_i, eta, k):
     """Exact reflectance of an absorbing interface with complex relative index η + i k (k ≥ 0).
 
     The real-arithmetic closed form of the complex Fresnel equations (Mitsuba 0.6 ``fresnelConductorExact``,
-    pbrt-v3 ``FrConductor``): with a² + b² = sqrt((η² − k² − sin²θ)² + 4η²k²) and a = sqrt((a² + b² + η² − k² − sin²θ)/2),
+    pbrt-v3 ``FrConductor``): with t = η² − k² − sin²θ, a² + b² = sqrt(t² + 4η²k²) and a = sqrt((a² + b² + t)/2),
     R_s = (a² + b² + cos²θ − 2a cosθ) / (a² + b² + cos²θ + 2a cosθ),
     R_p = R_s (cos²θ (a² + b²) + sin⁴θ − 2a cosθ sin²θ) / (cos²θ (a² + b²) + sin⁴θ + 2a cosθ sin²θ),
     F = (R_s + R_p)/2. With k = 0 it equals :func:`fresnel_dielectric` (total internal reflection included).
@@ -45,8 +45,8 @@ def fresnel_conductor(cos_i, eta, k):
     k = np.asarray(k, dtype=np.float64)
     cos2 = cos_i * cos_i
     sin2 = 1.0 - cos2
-    temp = eta * eta - k * k - sin2
-    a2pb2 = np.sqrt(temp * temp + 4.0 * eta * eta * k * k)
+    temp = (eta * eta - k * k) - sin2
+    a2pb2 = np.sqrt(temp * temp + 4.0 * (eta * eta * k * k))
     a = np.sqrt(np.maximum(0.0, 0.5 * (a2pb2 + temp)))
     term1 = a2pb2 + cos2
     term2 = 2.0 * a * cos_i

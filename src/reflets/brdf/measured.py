@@ -30,7 +30,8 @@ polar angles (θd, φd). wi is the direction to the light, wo to the viewer (the
 
     c_θh = sqrt(θh / (π/2)) · 90      c_θd = θd / (π/2) · 90      c_φd = φd / π · 180
 
-(MERL's reference code floors these, so entry i covers the continuous interval [i, i + 1)).
+(MERL's reference code floors these and clamps to [0, n − 1], so entry i covers the continuous interval
+[i, i + 1)).
 
 Interpolation convention
 ------------------------
@@ -40,18 +41,22 @@ with entries at i + 0.5, clamping at both ends of θh and θd (below 0.5 or abov
 used) and wrapping φd with period 180 (entry 179 neighbours entry 0: φd = π is φd = 0 by reciprocity). The
 GLSL twin does the same with a 3D float texture (x = φd with REPEAT, y = θd and z = θh with CLAMP_TO_EDGE,
 LINEAR filtering, texture coordinate = continuous index / n), so NumPy and GPU agree to float precision
-(``precision = "fp16"``: to half-float rounding, 2^-11 relative). Nearest-entry lookup as in MERL's code
+(``precision = "fp16"``: to half-float rounding, 2^-11 relative). The shader computes the angles with its own
+atan (Cephes, 2e-7): GLSL leaves atan's accuracy to the driver, and llvmpipe's (3e-6 rad) alone gives 1e-3
+relative differences in steep table regions. Texture units that filter with 8-bit weights (NVIDIA's, per
+the CUDA guide) place the sample within 1/512 of an entry: a relative difference up to |Δf/f|/512 between
+neighbouring entries, below the table's own interpolation error. Nearest-entry lookup as in MERL's code
 is *not* used: it makes f_r piecewise constant, with visible steps in highlights. :func:`write_merl`
 samples a function at the entry centres, so a written file reproduces it exactly there.
 
 Near grazing angles interpolation mixes entries whose centres lie below the horizon (which MERL files
-leave unmeasured or 0), so values within about 2° of the horizon are less reliable than the data.
+leave unmeasured or 0), so values within a table cell (1–2°) of the horizon are less reliable than the data.
 
 Physical caveats
 ----------------
 ``reciprocal`` is True: the folding of φd makes f(wo, wi) = f(wi, wo) exactly. ``energy_conserving`` is
-False: measured data contains noise and extrapolated entries, and several MERL materials reflect more than
-they receive at grazing angles, so no white-furnace guarantee is made.
+False: measured data contains noise, and values near grazing angles are extrapolated, so the directional
+albedo of a table can exceed 1; no white-furnace guarantee is made.
 
 Sampling: a one-sample mixture of cosine-weighted directions and a Blinn-style half-vector lobe
 (density ∝ cos^e θh around the normal, reflected about wo), with the exponent e and the mixture weight fitted
@@ -227,18 +232,19 @@ class MerlTable:
 def load_merl(path: str | Path) -> MerlTable:
     """Read a MERL BRDF file (cached per resolved path, modification time and size).
 
-    Raises :class:`SceneError` naming the file when it is missing, unreadable, not 90×90×180 or not the
-    exact size of such a file.
+    Raises :class:`SceneError` naming the file (made absolute) when it is missing, unreadable, not 90×90×180
+    or not the exact size of such a file. A relative path is taken relative to the working directory; scene
+    files resolve theirs against the scene's folder first.
     """
     resolved = Path(path).expanduser().resolve()
     try:
         info = resolved.stat()
     except FileNotFoundError:
-        raise SceneError("MERL BRDF file not found", file=path) from None
+        raise SceneError("MERL BRDF file not found", file=resolved) from None
     except OSError as exc:
-        raise SceneError(f"cannot read MERL BRDF file ({exc.strerror or exc})", file=path) from None
+        raise SceneError(f"cannot read MERL BRDF file ({exc.strerror or exc})", file=resolved) from None
     if not stat.S_ISREG(info.st_mode):
-        raise SceneError("is not a regular file (expected a MERL BRDF .binary file)", file=path)
+        raise SceneError("is not a regular file (expected a MERL BRDF .binary file)", file=resolved)
     return _load_cached(str(resolved), info.st_mtime_ns, info.st_size)
 
 

@@ -3,8 +3,9 @@
 :func:`to_mitsuba_dict` turns a validated scene into the dict :func:`mitsuba.load_dict` reads, and
 :func:`render_mitsuba` renders it with Mitsuba's ``direct`` integrator (multiple importance sampling of
 emitter and BSDF sampling, one bounce: the same light transport as the real-time techniques, which cast
-no indirect light). Mitsuba runs in its ``scalar_rgb`` variant (CPU, no JIT), so the radiance it returns
-is linear RGB, directly comparable with the GPU images.
+no indirect light), always with shadows (compare unshadowed techniques on scenes without occlusion).
+Mitsuba runs in its ``scalar_rgb`` variant (CPU, no JIT), so the radiance it returns is linear RGB,
+directly comparable with the GPU images.
 
 Conventions (each checked by ``tests/reference/test_mitsuba_bridge.py``):
 
@@ -21,15 +22,21 @@ Conventions (each checked by ``tests/reference/test_mitsuba_bridge.py``):
 * **Materials.** ``lambert`` → ``diffuse``; ``microfacet`` with ``fresnel`` none / dielectric / conductor,
   separable masking and no diffuse term → ``roughconductor`` (``alpha_u`` along the surface tangent
   ∂p/∂u, ``sample_visible``; fresnel none → ``material = "none"``, F = 1; dielectric → real ``eta``,
-  ``k = 0``). Anything else raises :class:`~reflets.errors.SceneError`.
+  ``k = 0``; ``specular`` above 1 goes through a 1 × 1 raw bitmap). Anything else raises
+  :class:`~reflets.errors.SceneError`. Mitsuba takes the tangent from the per-triangle ∂p/∂u of the uv
+  (projected onto the shading normal), not from our interpolated vertex tangents: identical on planes,
+  slightly different on curved anisotropic surfaces; its Beckmann masking is Walter's rational fit (≤ 0.4 %).
 * **Lights.** ``point`` → ``point`` (intensity, W/sr); ``directional`` → ``directional`` (Mitsuba's
   ``direction`` is also the way the light travels); ``quad`` → ``rectangle`` (a two-triangle mesh when
   the parallelogram is not a rectangle: Mitsuba's rectangle must not be sheared) with an ``area``
   emitter on the side of normalize((c2 − c1) × (c4 − c1)); ``polygon`` → a triangle-fan mesh with an
   ``area`` emitter. ``two_sided`` adds a flipped copy 10⁻⁴ × the light's size behind the first, so each
-  copy is hit only from its emitting side (coplanar copies would hide each other at random).
+  copy is hit only from its emitting side (coplanar copies would hide each other at random); Mitsuba picks
+  among emitters uniformly, so half the light samples of a two-sided light go to the copy facing away
+  (unbiased, but several times the variance at equal spp).
   ``environment`` → ``envmap`` from an EXR written in ``workdir`` (the image already multiplied by
-  ``scale``), ``to_world`` = rotation by ``rotate_y`` about +y.
+  ``scale``), ``to_world`` = rotation by ``rotate_y`` about +y. Light geometry has a black BSDF (it reflects
+  nothing) but, like every surface in Mitsuba, it casts shadows: Mitsuba always traces visibility.
 * **Environment texels.** Mitsuba's ``envmap`` places texel column k at u = (k + ½)/W (as we do) but row k
   at v = k/(H − 1), while we read the image like a GL texture: bilinear between texel centres
   ((k + ½)/W, (k + ½)/H), wrapping in u, clamped in v. The EXR handed to Mitsuba therefore has 2H + 1 rows
@@ -96,6 +103,17 @@ def _rgb(value) -> dict[str, Any]:
     return {"type": "rgb", "value": [float(v) for v in np.broadcast_to(np.asarray(value, dtype=np.float64), (3,))]}
 
 
+def _rgb_scale(value) -> dict[str, Any]:
+    """An RGB factor that may exceed 1: Mitsuba's ``rgb`` texture rejects reflectances above 1, so those go
+    through a raw 1 × 1 float bitmap (same value at every uv)."""
+    rgb = np.broadcast_to(np.asarray(value, dtype=np.float64), (3,))
+    if np.all(rgb <= 1.0):
+        return _rgb(rgb)
+    mi = mitsuba_module()
+    bitmap = mi.Bitmap(np.asarray(rgb, dtype=np.float32).reshape(1, 1, 3))
+    return {"type": "bitmap", "bitmap": bitmap, "raw": True, "filter_type": "nearest"}
+
+
 def _transform(matrix: np.ndarray):
     mi = mitsuba_module()
     return mi.ScalarTransform4f(np.asarray(matrix, dtype=np.float64).tolist())
@@ -116,7 +134,9 @@ def look_at_matrix(position, target, up) -> np.ndarray:
 
 def write_ply(path: Path, positions: np.ndarray, indices: np.ndarray, normals=None, uvs=None) -> Path:
     """A binary little-endian PLY triangle mesh (float32 vertices, optional normals and uv)."""
-    names = ["x", "y", "z"] + (["nx", "ny", "nz"] if normals is not None else []) + (["u", "v"] if uvs is not None else [])
+    names = (
+        ["x", "y", "z"] + (["nx", "ny", "nz"] if normals is not None else []) + (["u", "v"] if uvs is not None else [])
+    )
     columns = [positions] + ([normals] if normals is not None else []) + ([uvs] if uvs is not None else [])
     vertex = np.ascontiguousarray(np.concatenate(columns, axis=1), dtype="<f4")
     faces = np.zeros(len(indices), dtype=[("n", "u1"), ("i", "<u4", (3,))])
@@ -169,15 +189,20 @@ def _microfacet_to_mitsuba(name: str, material) -> dict[str, Any]:
         "alpha_u": float(alpha[0]),
         "alpha_v": float(alpha[1]),
         "sample_visible": True,
-        "specular_reflectance": _rgb(getattr(material, "specular", (1.0, 1.0, 1.0))),
+        "specular_reflectance": _rgb_scale(getattr(material, "specular", (1.0, 1.0, 1.0))),
     }
+    # ``eta_rgb`` / ``k_rgb`` resolve the class defaults (dielectric 1.5, conductor gold) when eta / k are None
+    eta = getattr(material, "eta_rgb", None) or getattr(material, "eta", None)
+    k = getattr(material, "k_rgb", None) or getattr(material, "k", None)
     if fresnel == "none":
         out["material"] = "none"
     elif fresnel == "conductor":
-        out["eta"] = _rgb(material.eta)
-        out["k"] = _rgb(material.k)
+        if eta is None or k is None:
+            raise _unsupported(name, "microfacet", "a conductor without eta and k")
+        out["eta"] = _rgb(eta)
+        out["k"] = _rgb(k)
     elif fresnel == "dielectric":
-        out["eta"] = _rgb(material.eta)
+        out["eta"] = _rgb(1.5 if eta is None else eta)
         out["k"] = _rgb(0.0)
     else:
         raise _unsupported(name, "microfacet", f"fresnel '{fresnel}'")
@@ -186,6 +211,10 @@ def _microfacet_to_mitsuba(name: str, material) -> dict[str, Any]:
 
 def _area_emitter(radiance) -> dict[str, Any]:
     return {"type": "area", "radiance": _rgb(radiance)}
+
+
+#: light geometry reflects nothing (Mitsuba would give a shape without a BSDF a grey diffuse one)
+_BLACK = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
 
 
 def _is_rectangle(e1: np.ndarray, e2: np.ndarray) -> bool:
@@ -208,7 +237,12 @@ def _quad_shapes(light: QuadLight, workdir: Path, stem: str) -> dict[str, dict[s
     for k, (a, b, n, c) in enumerate(sides):
         m = np.eye(4)
         m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = 0.5 * a, 0.5 * b, n, c
-        shapes[f"{stem}_{k}"] = {"type": "rectangle", "to_world": _transform(m), "emitter": _area_emitter(light.radiance)}
+        shapes[f"{stem}_{k}"] = {
+            "type": "rectangle",
+            "to_world": _transform(m),
+            "emitter": _area_emitter(light.radiance),
+            "bsdf": dict(_BLACK),
+        }
     return shapes
 
 
@@ -229,6 +263,7 @@ def _polygon_shapes(points: np.ndarray, radiance, two_sided: bool, workdir: Path
             "filename": str(path),
             "face_normals": True,
             "emitter": _area_emitter(radiance),
+            "bsdf": dict(_BLACK),
         }
     return shapes
 
@@ -319,7 +354,10 @@ def to_mitsuba_dict(
     workdir = Path(workdir)
 
     # Materials first, so an unsupported one fails before any file is written.
-    bsdfs = {name: material_to_mitsuba(name, scene.materials[name]) for name in {m.material for m in scene.mesh}}
+    bsdfs = {
+        name: material_to_mitsuba(name, scene.materials[name]) for name in sorted({m.material for m in scene.mesh})
+    }
+    workdir.mkdir(parents=True, exist_ok=True)
 
     out: dict[str, Any] = {"type": "scene", "integrator": {"type": "direct", "hide_emitters": False}}
     positions = []

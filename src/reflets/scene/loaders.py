@@ -43,7 +43,16 @@ def load_dict(data: dict[str, Any], base_dir: str | Path | None = None, source: 
 
 
 def _check_files(scene: Scene, source) -> None:
-    """Referenced files must exist now, not half-way through a render."""
+    """Referenced files must exist (and measured tables load) now, not half-way through a render."""
+    from ..brdf.measured import Measured
+
+    for name, material in scene.materials.items():
+        if isinstance(material, Measured):
+            material.file = scene.resolve(material.file)
+            try:
+                material.load()
+            except SceneError as exc:
+                raise SceneError(exc.message, file=exc.file, field=f"materials.{name}.file") from None
     for i, mesh in enumerate(scene.mesh):
         if isinstance(mesh, FileMesh) and not scene.resolve(mesh.file).is_file():
             raise SceneError(f"mesh file not found: {scene.resolve(mesh.file)}", file=source, field=f"mesh[{i}].file")
