@@ -15,7 +15,10 @@ CASES = [
     dict(rs=(0.9, 0.8, 0.7), rd=(0.0, 0.0, 0.0), nu=2, nv=300),
 ]
 #: parity also on the bare n_u = 1e4, n_v = 2 lobe (no diffuse term hiding specular errors) and isotropic 0
-PARITY = CASES + [dict(rs=(0.9, 0.9, 0.9), rd=(0.0, 0.0, 0.0), nu=1e4, nv=2), dict(rs=(0.04,) * 3, rd=(0.8,) * 3, nu=0, nv=0)]
+PARITY = CASES + [
+    dict(rs=(0.9, 0.9, 0.9), rd=(0.0, 0.0, 0.0), nu=1e4, nv=2),
+    dict(rs=(0.04,) * 3, rd=(0.8,) * 3, nu=0, nv=0),
+]
 
 
 def case_id(p: dict) -> str:

@@ -29,7 +29,7 @@ def test_ward_closed_form(directions, params):
     h = (wo + wi) / np.linalg.norm(wo + wi, axis=1, keepdims=True)
     theta_h = np.arccos(h[:, 2])
     phi_h = np.arctan2(h[:, 1], h[:, 0])
-    lobe = np.exp(-np.tan(theta_h) ** 2 * (np.cos(phi_h) ** 2 / ax**2 + np.sin(phi_h) ** 2 / ay**2))
+    lobe = np.exp(-(np.tan(theta_h) ** 2) * (np.cos(phi_h) ** 2 / ax**2 + np.sin(phi_h) ** 2 / ay**2))
     if params.get("variant") == "original":
         spec = lobe / (4 * np.pi * ax * ay * np.sqrt(wo[:, 2] * wi[:, 2]))
     else:  # (h·h)/(h·n)⁴ of the unnormalised h = wo + wi, i.e. 1/(|wo + wi|² cos⁴θ_h)
@@ -38,7 +38,9 @@ def test_ward_closed_form(directions, params):
     assert np.allclose(m.eval(wo, wi), expected, rtol=1e-9, atol=1e-300)
 
 
-@pytest.mark.parametrize("params", CASES + [dict(kd=(0, 0, 0), ks=(1, 1, 1), alpha=1.0, variant="original")], ids=case_id)
+@pytest.mark.parametrize(
+    "params", CASES + [dict(kd=(0, 0, 0), ks=(1, 1, 1), alpha=1.0, variant="original")], ids=case_id
+)
 def test_ward_glsl_matches_numpy(ctx, rng, params):
     check_glsl_parity(Ward(**params), ctx, rng)
 

@@ -109,7 +109,9 @@ class Lafortune(Material):
                 + np.log(np.maximum(axes[..., 2], 0.05))
             )
             log_w = np.where(ok, log_w, -np.inf)  # an empty lobe (C ⊙ wo = 0) is zero everywhere
-            log_w = np.concatenate([np.broadcast_to(np.log(luminance(self.kd)), log_w.shape[:-1])[..., None], log_w], -1)
+            log_w = np.concatenate(
+                [np.broadcast_to(np.log(luminance(self.kd)), log_w.shape[:-1])[..., None], log_w], -1
+            )
         top = np.max(log_w, axis=-1, keepdims=True)
         w = np.exp(log_w - np.where(np.isfinite(top), top, 0.0))  # ratios only: no overflow of |C|^n
         total = np.sum(w, axis=-1, keepdims=True)
