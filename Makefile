@@ -1,4 +1,5 @@
 # Quick start: `make demo` (set up + render the gallery) and `make test` (set up + run the tests).
+# `make test` also installs the [reference] extra (Mitsuba 3) so the cross-checks against it run.
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
@@ -15,7 +16,7 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test]"
+	$(BIN)/python -m pip install --quiet -e ".[test,reference]"
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed

@@ -68,14 +68,25 @@ def cmd_reference(args) -> int:
     check_output_path(out, (".exr", ".npy"))
     stderr_path = out.with_name(out.stem + ".stderr" + out.suffix)
     size = _size(args.size) if args.size else None
-    result = reference(as_scene(args.scene), spp=args.spp, seed=args.seed, engine=args.engine,
-                       visibility=args.visibility == "on", size=size, pixel=args.pixel, heuristic=args.mis,
-                       progress=not args.quiet)
+    result = reference(
+        as_scene(args.scene),
+        spp=args.spp,
+        seed=args.seed,
+        engine=args.engine,
+        visibility=args.visibility == "on",
+        size=size,
+        pixel=args.pixel,
+        heuristic=args.mis,
+        progress=not args.quiet,
+    )
     write_image(out, result.image)
     if result.engine == "numpy":
         write_image(stderr_path, result.stderr)
-    print(f"wrote {out}" + (f" and {stderr_path}" if result.engine == "numpy" else "")
-          + f" ({result.spp} spp, {result.seconds:.1f} s, {result.samples_per_second / 1e6:.2f} M samples/s)")
+    print(
+        f"wrote {out}"
+        + (f" and {stderr_path}" if result.engine == "numpy" else "")
+        + f" ({result.spp} spp, {result.seconds:.1f} s, {result.samples_per_second / 1e6:.2f} M samples/s)"
+    )
     return 0
 
 
@@ -204,8 +215,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--engine", choices=["numpy", "mitsuba"], default="numpy")
     p.add_argument("--visibility", choices=["on", "off"], default="on", help="shadows (default on)")
-    p.add_argument("--pixel", choices=["center", "box"], default="center",
-                   help="sample pixel centres like the GPU (default) or average over the pixel")
+    p.add_argument(
+        "--pixel",
+        choices=["center", "box"],
+        default="center",
+        help="sample pixel centres like the GPU (default) or average over the pixel",
+    )
     p.add_argument("--mis", choices=["power", "balance"], default="power", help="MIS heuristic (default power)")
     p.add_argument("--size", help="WIDTHxHEIGHT, overrides the camera's size")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -222,9 +237,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("reference")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--diff", metavar="DIFF.png", help="write a false-colour relative-difference image")
-    p.add_argument("--stderr", metavar="STDERR.exr",
-                   help="reference's per-pixel standard error (default: REFERENCE.stderr.exr if it exists); "
-                   "adds mean_z, mean_abs_z, within_3_stderr")
+    p.add_argument(
+        "--stderr",
+        metavar="STDERR.exr",
+        help="reference's per-pixel standard error (default: REFERENCE.stderr.exr if it exists); "
+        "adds mean_z, mean_abs_z, within_3_stderr",
+    )
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("info", help="OpenGL driver, methods and package versions")

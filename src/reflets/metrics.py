@@ -234,5 +234,8 @@ def zscores(test: np.ndarray, ref: np.ndarray, stderr: np.ndarray) -> dict[str, 
     if not np.any(keep):
         return {"mean_z": float("nan"), "mean_abs_z": float("nan"), "within_3_stderr": float("nan")}
     z = (t[keep] - r[keep]) / s[keep]
-    return {"mean_z": float(z.mean()), "mean_abs_z": float(np.abs(z).mean()),
-            "within_3_stderr": float(np.mean(np.abs(z) <= 3.0))}
+    return {
+        "mean_z": float(z.mean()),
+        "mean_abs_z": float(np.abs(z).mean()),
+        "within_3_stderr": float(np.mean(np.abs(z) <= 3.0)),
+    }

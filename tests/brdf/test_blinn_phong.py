@@ -60,3 +60,12 @@ def test_popular_approximate_normalisation_would_create_energy():
     from reflets.brdf.blinn_phong import normalization
 
     assert (20 + 8) / (8 * np.pi) / normalization(20) == pytest.approx(1.0607, abs=1e-3)
+
+
+def test_exponent_zero_lobe_pdf_is_zero_behind_the_normal(rng):
+    """Regression: pdf_power_cosine gave cos^0 = 1 below the axis, so ∫pdf ≠ the sampled mass."""
+    from brdf_checks import check_pdf_integrates_to_one, direction
+
+    check_pdf_integrates_to_one(
+        BlinnPhong(kd=(0, 0, 0), ks=(1, 1, 1), exponent=0, normalized=True), direction(1.0), rng
+    )

@@ -57,12 +57,15 @@ def test_quad_light_plane_matches_lambert_polygon_formula_within_standard_error(
 def test_constant_environment_on_lambert_sphere_is_a_white_furnace(tmp_path):
     """Uniform sky of radiance L on a convex Lambert sphere: L_o = ρ L everywhere (no self-occlusion)."""
     np.save(tmp_path / "white.npy", np.full((16, 32, 3), 2.0, dtype=np.float32))
-    scene = reflets.load_dict({
-        "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov_y": 35, "size": [48, 48]},
-        "materials": {"m": {"type": "lambert", "albedo": [0.5, 0.7, 0.9]}},
-        "mesh": [{"shape": "sphere", "radius": 1, "material": "m"}],
-        "light": [{"type": "environment", "file": "white.npy"}],
-    }, base_dir=tmp_path)
+    scene = reflets.load_dict(
+        {
+            "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov_y": 35, "size": [48, 48]},
+            "materials": {"m": {"type": "lambert", "albedo": [0.5, 0.7, 0.9]}},
+            "mesh": [{"shape": "sphere", "radius": 1, "material": "m"}],
+            "light": [{"type": "environment", "file": "white.npy"}],
+        },
+        base_dir=tmp_path,
+    )
     result = reference(scene, spp=32, progress=False)
     normals = reflets.render(scene, method="normal")
     on_sphere = np.linalg.norm(normals, axis=-1) > 0.5
@@ -75,8 +78,9 @@ def test_constant_environment_on_lambert_sphere_is_a_white_furnace(tmp_path):
 
 def test_shadows_on_block_a_point_light_and_off_does_not(minimal_scene):
     minimal_scene["materials"]["ball"] = {"type": "lambert", "albedo": [0.5, 0.5, 0.5]}
-    minimal_scene["mesh"].append({"shape": "sphere", "radius": 0.3, "material": "ball",
-                                  "transform": {"translate": [0, 1, 0]}})
+    minimal_scene["mesh"].append(
+        {"shape": "sphere", "radius": 0.3, "material": "ball", "transform": {"translate": [0, 1, 0]}}
+    )
     scene = reflets.load_dict(small(minimal_scene))
     on = reference(scene, spp=1, progress=False, visibility=True).image
     off = reference(scene, spp=1, progress=False, visibility=False).image

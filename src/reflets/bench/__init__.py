@@ -26,8 +26,12 @@ def register_suite(name: str):
 
 def machine() -> dict:
     """What the numbers were measured on (written into every report)."""
-    info = {"python": platform.python_version(), "platform": platform.platform(), "cpu": platform.processor(),
-            "cores": os.cpu_count()}
+    info = {
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "cpu": platform.processor(),
+        "cores": os.cpu_count(),
+    }
     try:
         from ..gpu import gl_info
 

@@ -36,18 +36,35 @@ def bench_reference(quick: bool) -> tuple[dict, str]:
         for engine, visibility in engines:
             rates = []
             for run in range(runs):
-                result = reference(scene, spp=spp, seed=run, engine=engine, visibility=visibility, size=size,
-                                   progress=False)
+                result = reference(
+                    scene, spp=spp, seed=run, engine=engine, visibility=visibility, size=size, progress=False
+                )
                 rates.append(result.samples_per_second)
-            rows.append({"scene": name, "engine": engine, "visibility": visibility, "size": list(size), "spp": spp,
-                         "runs": runs, "samples_per_second_median": statistics.median(rates),
-                         "samples_per_second": rates})
-    lines = ["# Reference renderer throughput", "",
-             f"{size[0]}×{size[1]} pixels, {spp} spp, median of {runs} run(s); samples = pixels × spp.", "",
-             "| scene | engine | shadows | M samples/s |", "|---|---|---|---|"]
+            rows.append(
+                {
+                    "scene": name,
+                    "engine": engine,
+                    "visibility": visibility,
+                    "size": list(size),
+                    "spp": spp,
+                    "runs": runs,
+                    "samples_per_second_median": statistics.median(rates),
+                    "samples_per_second": rates,
+                }
+            )
+    lines = [
+        "# Reference renderer throughput",
+        "",
+        f"{size[0]}×{size[1]} pixels, {spp} spp, median of {runs} run(s); samples = pixels × spp.",
+        "",
+        "| scene | engine | shadows | M samples/s |",
+        "|---|---|---|---|",
+    ]
     for r in rows:
-        lines.append(f"| {r['scene']} | {r['engine']} | {'on' if r['visibility'] else 'off'} | "
-                     f"{r['samples_per_second_median'] / 1e6:.3f} |")
+        lines.append(
+            f"| {r['scene']} | {r['engine']} | {'on' if r['visibility'] else 'off'} | "
+            f"{r['samples_per_second_median'] / 1e6:.3f} |"
+        )
     if not _mitsuba_available():
         lines += ["", "Mitsuba 3 is not installed here (`pip install 'reflets[reference]'`): no Mitsuba rows."]
     return {"rows": rows}, "\n".join(lines) + "\n"

@@ -2,17 +2,37 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Union
+from typing import Annotated
 
 from pydantic import Field
 
+from .ashikhmin_shirley import AshikhminShirley
 from .base import MATERIALS, Material, register_material
 from .blinn_phong import BlinnPhong
+from .lafortune import Lafortune
 from .lambert import Lambert
 from .measured import Measured
 from .microfacet import Microfacet
+from .phong import Phong
+from .ward import Ward
 
 #: the scene-file form of any registered material, chosen by its ``type`` key
-MaterialSpec = Annotated[Union[Lambert, BlinnPhong, Microfacet, Measured], Field(discriminator="type")]  # noqa: UP007
+MaterialSpec = Annotated[
+    Lambert | Phong | BlinnPhong | Lafortune | Ward | AshikhminShirley | Microfacet | Measured,
+    Field(discriminator="type"),
+]  # noqa: UP007
 
-__all__ = ["MATERIALS", "Material", "MaterialSpec", "register_material", "Lambert", "BlinnPhong", "Microfacet", "Measured"]
+__all__ = [
+    "MATERIALS",
+    "Material",
+    "MaterialSpec",
+    "register_material",
+    "Lambert",
+    "Phong",
+    "BlinnPhong",
+    "Lafortune",
+    "Ward",
+    "AshikhminShirley",
+    "Microfacet",
+    "Measured",
+]

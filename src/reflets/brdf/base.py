@@ -40,6 +40,7 @@ class Material(BaseModel):
 
     #: package path of the GLSL twin, e.g. "reflets/brdf/glsl/lambert.glsl"
     glsl: ClassVar[str]
+
     @property
     def reciprocal(self) -> bool:
         """f(wo, wi) == f(wi, wo) with these parameters (the tests check it when True)."""
@@ -126,9 +127,10 @@ def sample_power_cosine(axis: np.ndarray, exponent, u1: np.ndarray, u2: np.ndarr
 
 
 def pdf_power_cosine(axis: np.ndarray, exponent, w: np.ndarray) -> np.ndarray:
-    cos_a = np.maximum(np.sum(axis * w, axis=-1), 0.0)
+    cos_a = np.sum(axis * w, axis=-1)
     e = np.asarray(exponent, dtype=np.float64)
-    return (e + 1.0) / (2.0 * np.pi) * cos_a**e
+    lobe = np.where(cos_a > 0.0, np.maximum(cos_a, 0.0) ** e, 0.0)  # 0 behind the axis, also for e = 0
+    return (e + 1.0) / (2.0 * np.pi) * lobe
 
 
 def orthonormal_basis(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -10,12 +10,12 @@ from pydantic import Field
 from .base import (
     Material,
     Reflectance,
+    finish_sample,
     luminance,
     mix_pdf,
     normalize,
     pdf_cosine,
     pdf_power_cosine,
-    finish_sample,
     reflect_or_fail,
     register_material,
     sample_cosine,

@@ -50,16 +50,22 @@ def reference(
         )
     if engine == "mitsuba":
         if not visibility:
-            raise ArgumentError("Mitsuba always computes shadows; use engine='numpy' for visibility off",
-                                field="visibility")
+            raise ArgumentError(
+                "Mitsuba always computes shadows; use engine='numpy' for visibility off", field="visibility"
+            )
         from .mitsuba_bridge import render_mitsuba
 
         start = time.perf_counter()
         image = render_mitsuba(scene, spp=spp, seed=seed, size=size)
         import numpy as np
 
-        return ReferenceResult(image=image, stderr=np.full_like(image, np.nan), spp=spp,
-                               seconds=time.perf_counter() - start, engine="mitsuba")
+        return ReferenceResult(
+            image=image,
+            stderr=np.full_like(image, np.nan),
+            spp=spp,
+            seconds=time.perf_counter() - start,
+            engine="mitsuba",
+        )
     raise ArgumentError(f"unknown engine '{engine}'; allowed: {', '.join(ENGINES)}", field="engine")
 
 

@@ -103,22 +103,30 @@ class SceneGeometry:
     def intersect(self, origins: np.ndarray, directions: np.ndarray, emitters_only: bool = False) -> Hits:
         scene = self._emitters_only if emitters_only else self._all
         out = scene.run(
-            np.ascontiguousarray(origins, dtype=np.float32), np.ascontiguousarray(directions, dtype=np.float32),
+            np.ascontiguousarray(origins, dtype=np.float32),
+            np.ascontiguousarray(directions, dtype=np.float32),
             output=1,
         )
         kind = np.where(out["primID"] >= 0, out["geomID"], -1).astype(np.int64)
         kind[(kind == MESHES) & (not self._has[0])] = -1
         kind[(kind == EMITTERS) & (not self._has[1])] = -1
-        return Hits(kind=kind, prim=out["primID"].astype(np.int64), u=out["u"].astype(np.float64),
-                    v=out["v"].astype(np.float64), t=out["tfar"].astype(np.float64))
+        return Hits(
+            kind=kind,
+            prim=out["primID"].astype(np.int64),
+            u=out["u"].astype(np.float64),
+            v=out["v"].astype(np.float64),
+            t=out["tfar"].astype(np.float64),
+        )
 
     def occluded(self, origins: np.ndarray, directions: np.ndarray, distances: np.ndarray) -> np.ndarray:
         """True where something (mesh or emitter) lies between origin and origin + distance · direction."""
         if len(origins) == 0:
             return np.zeros(0, dtype=bool)
         res = self._all.run(
-            np.ascontiguousarray(origins, dtype=np.float32), np.ascontiguousarray(directions, dtype=np.float32),
-            dists=np.ascontiguousarray(distances, dtype=np.float32), query="OCCLUDED",
+            np.ascontiguousarray(origins, dtype=np.float32),
+            np.ascontiguousarray(directions, dtype=np.float32),
+            dists=np.ascontiguousarray(distances, dtype=np.float32),
+            query="OCCLUDED",
         )
         return np.asarray(res) != -1
 
@@ -145,5 +153,9 @@ class SceneGeometry:
         t = np.where(length > 1e-6, t / np.maximum(length, 1e-300), fallback)
         sign = np.where(tan4[:, 3:4] < 0, -1.0, 1.0)
         b = sign * np.cross(n, t)
-        return Surface(position=position, frame=np.stack([t, b, n], axis=-1), geometric_normal=ng,
-                       material=self.face_material[prim])
+        return Surface(
+            position=position,
+            frame=np.stack([t, b, n], axis=-1),
+            geometric_normal=ng,
+            material=self.face_material[prim],
+        )

@@ -55,8 +55,9 @@ class EnvironmentSampler:
         lum = image.astype(np.float64) @ np.array([0.2126, 0.7152, 0.0722])
         padded = np.pad(lum, 1, mode="edge")
         padded[:, 0], padded[:, -1] = padded[:, -2], padded[:, 1]  # u wraps around
-        dilated = np.max([padded[1 + dy : h + 1 + dy, 1 + dx : w + 1 + dx] for dy in (-1, 0, 1) for dx in (-1, 0, 1)],
-                         axis=0)
+        dilated = np.max(
+            [padded[1 + dy : h + 1 + dy, 1 + dx : w + 1 + dx] for dy in (-1, 0, 1) for dx in (-1, 0, 1)], axis=0
+        )
         sin_theta = np.sin(np.pi * (np.arange(h) + 0.5) / h)
         weights = dilated * sin_theta[:, None] + 1e-12 * sin_theta[:, None]  # never exactly zero
         self.pmf = weights / weights.sum()

@@ -86,8 +86,14 @@ class MonteCarloReference:
         self.dims = 2 * len(self.area) + 2 + (2 if self.env else 0) + 2  # + pixel jitter
 
     # ------------------------------------------------------------------------------------------ driver
-    def render(self, spp: int, seed: int = 0, size: tuple[int, int] | None = None,
-               pixel: Literal["center", "box"] = "center", progress: bool = True) -> ReferenceResult:
+    def render(
+        self,
+        spp: int,
+        seed: int = 0,
+        size: tuple[int, int] | None = None,
+        pixel: Literal["center", "box"] = "center",
+        progress: bool = True,
+    ) -> ReferenceResult:
         if spp < 1:
             raise ArgumentError(f"must be ≥ 1, got {spp}", field="spp")
         if pixel not in ("center", "box"):
@@ -112,8 +118,12 @@ class MonteCarloReference:
             bar.advance()
         bar.close()
         seconds = time.perf_counter() - start
-        return ReferenceResult(image=mean.reshape(height, width, 3).astype(np.float32),
-                               stderr=err.reshape(height, width, 3).astype(np.float32), spp=spp, seconds=seconds)
+        return ReferenceResult(
+            image=mean.reshape(height, width, 3).astype(np.float32),
+            stderr=err.reshape(height, width, 3).astype(np.float32),
+            spp=spp,
+            seconds=seconds,
+        )
 
     # --------------------------------------------------------------------------------------- per chunk
     def _pixels(self, ids, width, height, spp, rng, pixel) -> np.ndarray:
@@ -278,8 +288,13 @@ class _RichProgress:
     def __init__(self, total: int):
         from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-        self.progress = Progress(TextColumn("reference"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                                 TimeRemainingColumn(), transient=True)
+        self.progress = Progress(
+            TextColumn("reference"),
+            BarColumn(),
+            TextColumn("{task.completed}/{task.total}"),
+            TimeRemainingColumn(),
+            transient=True,
+        )
         self.task = self.progress.add_task("reference", total=total)
         self.progress.start()
 
