@@ -20,7 +20,7 @@ from .ward import Ward
 MaterialSpec = Annotated[
     Lambert | Phong | BlinnPhong | Lafortune | Ward | AshikhminShirley | Microfacet | Measured,
     Field(discriminator="type"),
-]  # noqa: UP007
+]
 
 __all__ = [
     "MATERIALS",
