@@ -33,3 +33,4 @@ def test_lambert_rejects_unphysical_albedo(albedo):
 
     with pytest.raises(ValidationError):
         Lambert(albedo=albedo)
+
