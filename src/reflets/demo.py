@@ -24,13 +24,30 @@ from .validation import NotAnalytic, analytic_image, max_relative_error
 
 FRAMES = 3
 
-#: (scene file in reflets/data/scenes, methods shown for it); later techniques add their scenes here
-DEMO: list[tuple[str, tuple[str, ...]]] = [
-    ("01_plane_point.toml", ("forward",)),
-    ("02_sphere_directional.toml", ("forward",)),
-    ("03_shapes.toml", ("forward",)),
-    ("04_bunny_arealight.toml", ("forward",)),
-    ("05_environment.toml", ("forward",)),
+REFERENCE_SPP = 32
+
+
+@dataclass(frozen=True)
+class DemoEntry:
+    """A built-in scene (file in reflets/data/scenes), the methods shown for it, and whether the gallery also
+    shows the NumPy Monte Carlo reference next to them (with error metrics)."""
+
+    scene: str
+    methods: tuple[str, ...] = ("forward",)
+    reference: bool = False
+
+
+#: later techniques add their scenes here
+DEMO: list[DemoEntry] = [
+    DemoEntry("01_plane_point.toml"),
+    DemoEntry("02_sphere_directional.toml"),
+    DemoEntry("03_shapes.toml"),
+    DemoEntry("04_bunny_arealight.toml"),
+    DemoEntry("05_environment.toml"),
+    DemoEntry("06_materials.toml"),
+    DemoEntry("10_ref_plane_quad.toml", reference=True),
+    DemoEntry("11_ref_ggx_sphere_quad.toml", reference=True),
+    DemoEntry("12_ref_sphere_env.toml", reference=True),
 ]
 
 
@@ -46,6 +63,7 @@ class DemoResult:
     analytic_max_rel_error: float | None
     exr: str
     png: str
+    reference: dict | None = None  # metrics vs the NumPy reference, its image and timing
 
 
 def scene_path(name: str) -> Path:
@@ -63,7 +81,7 @@ def run_demo(out_dir: Path, size: tuple[int, int] | None = None) -> list[DemoRes
         raise OutputError(f"cannot create the output folder ({exc.strerror})", file=out_dir) from None
     console = Console(stderr=True)
     ctx = get_context()
-    jobs = [(name, method) for name, methods in DEMO for method in methods]
+    jobs = [(entry, method) for entry in DEMO for method in entry.methods]
     results: list[DemoResult] = []
     with Progress(
         TextColumn("{task.description}"),
@@ -74,9 +92,13 @@ def run_demo(out_dir: Path, size: tuple[int, int] | None = None) -> list[DemoRes
         transient=True,
     ) as progress:
         task = progress.add_task("demo", total=len(jobs))
-        for name, method in jobs:
-            progress.update(task, description=f"{name} · {method}")
-            results.append(_render_entry(ctx, name, method, size, out_dir))
+        for entry, method in jobs:
+            progress.update(task, description=f"{entry.scene} · {method}")
+            result = _render_entry(ctx, entry.scene, method, size, out_dir)
+            if entry.reference:
+                progress.update(task, description=f"{entry.scene} · NumPy reference, {REFERENCE_SPP} spp")
+                result.reference = _reference(entry.scene, size, out_dir, result)
+            results.append(result)
             progress.advance(task)
     info = gl_info()
     _write_gallery(out_dir, results, info)
@@ -121,17 +143,39 @@ def _render_entry(ctx, name: str, method: str, size, out_dir: Path) -> DemoResul
     )
 
 
+def _reference(name: str, size, out_dir: Path, result: DemoResult) -> dict:
+    """Render the NumPy reference of a demo scene and compare the technique's image with it."""
+    from .imageio import read_image, write_png8
+    from .metrics import compare, difference_image, zscores
+    from .reference import reference
+
+    scene = load_scene(scene_path(name))
+    ref = reference(scene, spp=REFERENCE_SPP, size=size, progress=False)
+    image = read_image(out_dir / result.exr)
+    stem = Path(result.exr).stem
+    write_image(out_dir / f"{stem}.reference.exr", ref.image)
+    write_image(out_dir / f"{stem}.reference.stderr.exr", ref.stderr)
+    write_image(out_dir / f"{stem}.reference.png", ref.image)
+    write_png8(out_dir / f"{stem}.diff.png", difference_image(image, ref.image))
+    return {**compare(image, ref.image), **zscores(image, ref.image, ref.stderr), "spp": REFERENCE_SPP,
+            "seconds": ref.seconds, "png": f"{stem}.reference.png", "diff": f"{stem}.diff.png"}
+
+
 def _print_summary(results: list[DemoResult], info: dict, out_dir: Path) -> None:
     from rich.console import Console
     from rich.table import Table
 
     table = Table(title=f"reflets demo — {info['renderer']}")
-    for col in ("scene", "method", "size", "prepare ms", "frame ms (median)", "max rel. error vs exact"):
-        table.add_column(col, justify="right" if "ms" in col or "error" in col else "left")
+    for col in ("scene", "method", "size", "prepare ms", "frame ms (median)", "max rel. error vs exact",
+                "relMSE vs reference", "within 3σ of reference"):
+        table.add_column(col, justify="left" if col in ("scene", "method", "size") else "right")
     for r in results:
         err = "—" if r.analytic_max_rel_error is None else f"{r.analytic_max_rel_error:.2e}"
-        table.add_row(r.name, r.method, r.size, f"{r.prepare_ms:.0f}", f"{r.frame_ms:.1f}", err)
-    console = Console(width=max(110, Console().width))
+        ref = r.reference or {}
+        rel = f"{ref['relmse']:.2e}" if ref else "—"
+        within = f"{100 * ref['within_3_stderr']:.1f} %" if ref else "—"
+        table.add_row(r.name, r.method, r.size, f"{r.prepare_ms:.0f}", f"{r.frame_ms:.1f}", err, rel, within)
+    console = Console(width=max(150, Console().width))
     console.print(table)
     console.print(f"gallery: {out_dir / 'index.html'}")
 
@@ -156,7 +200,8 @@ def _write_gallery(out_dir: Path, results: list[DemoResult], info: dict) -> None
 body {{ font-family: system-ui, sans-serif; margin: 2em; background: #111; color: #ddd; }}
 main {{ display: grid; grid-template-columns: repeat(auto-fill, minmax(420px, 1fr)); gap: 1.5em; }}
 figure {{ margin: 0; background: #1c1c1c; padding: 0.8em; border-radius: 6px; }}
-img {{ width: 100%; image-rendering: pixelated; }} code {{ color: #9cf; }} a {{ color: #9cf; }}
+img {{ width: 100%; image-rendering: pixelated; }} .pair {{ display: flex; gap: 0.4em; margin-top: 0.4em; }}
+.pair img {{ width: 50%; }} code {{ color: #9cf; }} a {{ color: #9cf; }}
 </style></head><body>
 <h1>reflets demo</h1>
 <p>OpenGL: {html.escape(info["renderer"])} — {html.escape(info["version"])}; Python {platform.python_version()};
