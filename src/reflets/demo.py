@@ -157,8 +157,14 @@ def _reference(name: str, size, out_dir: Path, result: DemoResult) -> dict:
     write_image(out_dir / f"{stem}.reference.stderr.exr", ref.stderr)
     write_image(out_dir / f"{stem}.reference.png", ref.image)
     write_png8(out_dir / f"{stem}.diff.png", difference_image(image, ref.image))
-    return {**compare(image, ref.image), **zscores(image, ref.image, ref.stderr), "spp": REFERENCE_SPP,
-            "seconds": ref.seconds, "png": f"{stem}.reference.png", "diff": f"{stem}.diff.png"}
+    return {
+        **compare(image, ref.image),
+        **zscores(image, ref.image, ref.stderr),
+        "spp": REFERENCE_SPP,
+        "seconds": ref.seconds,
+        "png": f"{stem}.reference.png",
+        "diff": f"{stem}.diff.png",
+    }
 
 
 def _print_summary(results: list[DemoResult], info: dict, out_dir: Path) -> None:
@@ -166,8 +172,16 @@ def _print_summary(results: list[DemoResult], info: dict, out_dir: Path) -> None
     from rich.table import Table
 
     table = Table(title=f"reflets demo — {info['renderer']}")
-    for col in ("scene", "method", "size", "prepare ms", "frame ms (median)", "max rel. error vs exact",
-                "relMSE vs reference", "within 3σ of reference"):
+    for col in (
+        "scene",
+        "method",
+        "size",
+        "prepare ms",
+        "frame ms (median)",
+        "max rel. error vs exact",
+        "relMSE vs reference",
+        "within 3σ of reference",
+    ):
         table.add_column(col, justify="left" if col in ("scene", "method", "size") else "right")
     for r in results:
         err = "—" if r.analytic_max_rel_error is None else f"{r.analytic_max_rel_error:.2e}"
@@ -188,6 +202,16 @@ def _write_gallery(out_dir: Path, results: list[DemoResult], info: dict) -> None
             if r.analytic_max_rel_error is None
             else f"<br>max relative error vs closed form: {r.analytic_max_rel_error:.2e}"
         )
+        ref = r.reference
+        if ref:
+            err += (
+                f"<br>vs NumPy reference ({ref['spp']} spp, {ref['seconds']:.1f} s): relMSE {ref['relmse']:.2e}, "
+                f"FLIP {ref['flip']:.3f}, mean |z| {ref['mean_abs_z']:.2f}, "
+                f"{100 * ref['within_3_stderr']:.1f} % within 3σ"
+                f'<div class="pair"><img src="{html.escape(ref["png"])}" alt="reference">'
+                f'<img src="{html.escape(ref["diff"])}" alt="difference"></div>'
+                "<small>reference (left) and relative difference (right, magma)</small>"
+            )
         cards.append(
             f'<figure><a href="{html.escape(r.exr)}"><img src="{html.escape(r.png)}" alt="{html.escape(r.title)}">'
             f"</a><figcaption><b>{html.escape(r.title)}</b><br>method <code>{html.escape(r.method)}</code>, "

@@ -33,4 +33,3 @@ def test_lambert_rejects_unphysical_albedo(albedo):
 
     with pytest.raises(ValidationError):
         Lambert(albedo=albedo)
-

@@ -51,7 +51,13 @@ def run_suite(name: str, out_dir: Path, quick: bool = False) -> dict:
     except OSError as exc:
         raise OutputError(f"cannot create the results folder ({exc.strerror})", file=out_dir) from None
     results, markdown = SUITES[name](quick)
-    results = {"suite": name, "quick": quick, "machine": machine(), **results}
+    info = machine()
+    results = {"suite": name, "quick": quick, "machine": info, **results}
+    gl = info["opengl"].get("renderer", info["opengl"].get("error", "?"))
+    markdown += (
+        f"\nMachine: {info['cores']} cores, {info['cpu'] or info['platform']}, Python {info['python']}, "
+        f"OpenGL: {gl}. Command: `reflets bench {name}{' --quick' if quick else ''}`.\n"
+    )
     (out_dir / f"{name}.json").write_text(json.dumps(results, indent=2))
     (out_dir / f"{name}.md").write_text(markdown)
     print(markdown)

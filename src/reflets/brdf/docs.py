@@ -55,7 +55,7 @@ PROPERTIES = {
     "phong": ("normalised form only", "normalised form with kd + ks ≤ 1"),
     "blinn_phong": ("normalised form only", "normalised form with kd + ks ≤ 1"),
     "lafortune": ("yes", "not guaranteed (depends on fitted lobes)"),
-    "ward": ("yes", "\"duer\" variant with kd + ks ≤ 1; \"original\" exceeds 1 at grazing angles"),
+    "ward": ("yes", '"duer" variant with kd + ks ≤ 1; "original" exceeds 1 at grazing angles'),
     "ashikhmin_shirley": ("yes", "yes"),
     "microfacet": ("yes", "when diffuse + specular·max F ≤ 1 (single scattering loses energy)"),
     "measured": ("yes (φd folding)", "not guaranteed (measured noise, extrapolation near grazing)"),
@@ -70,8 +70,16 @@ def markdown() -> str:
     for name, cls in MATERIALS.items():
         doc = inspect.cleandoc(cls.__doc__ or "")
         module = inspect.getmodule(cls).__name__
-        lines += ["", f"## `{name}`", "", f"`{module}.{cls.__name__}` — GLSL twin `{cls.glsl}`", "", "```text", doc,
-                  "```"]
+        lines += [
+            "",
+            f"## `{name}`",
+            "",
+            f"`{module}.{cls.__name__}` — GLSL twin `{cls.glsl}`",
+            "",
+            "```text",
+            doc,
+            "```",
+        ]
     return "\n".join(lines) + "\n"
 
 
