@@ -1,6 +1,6 @@
 """Rendering techniques, registered by name for ``--method`` / ``render(method=...)``."""
 
-from . import forward  # noqa: F401  (registers forward and the AOV methods)
+from . import arealights, forward  # noqa: F401  (registers forward, the AOV methods, the area-light methods)
 from .base import TECHNIQUES, Technique, TechniqueParams, get_technique, register_technique
 
 DEFAULT_METHOD = "forward"

@@ -109,14 +109,13 @@ class Forward(Technique):
         self.release()
         self.scene = scene
         self._objects = []
-        flags = {"OUTPUT": _OUTPUTS[self.params.output]}
         points = []
         self._draws = []
         for index, mesh in enumerate(scene.mesh):
             data = mesh_data(scene, index)
             points.append(data.positions)
             material = scene.materials[mesh.material]
-            program = get_program(ctx, MESH_PROGRAM, slots={"BRDF": material.glsl}, **flags)
+            program = get_program(ctx, self.program_spec, slots=self.slots(material), **self.flags(material))
             vbo = ctx.buffer(data.interleaved().tobytes())
             ibo = ctx.buffer(data.indices.tobytes())
             vao = ctx.vertex_array(
@@ -126,7 +125,8 @@ class Forward(Technique):
                 skip_errors=True,
             )
             self._objects += [vbo, ibo, vao]
-            self._draws.append((program, vao, material.uniforms(), material.textures(ctx)))
+            uniforms = {**material.uniforms(), **self.material_uniforms(material)}
+            self._draws.append((program, vao, uniforms, material.textures(ctx)))
 
         points_l, dirs, area, emitters = [], [], [], []
         for light in scene.light:
@@ -138,10 +138,7 @@ class Forward(Technique):
             elif isinstance(light, QuadLight | PolygonLight):
                 poly = light.polygon()
                 points.append(poly)
-                nl = polygon_normal(poly)
-                pts, dA = area_light_samples(poly, self.params.area_samples)
-                for y, a in zip(pts, dA, strict=True):
-                    area += [(*y, a), (*nl, float(light.two_sided)), (*light.radiance, 0.0)]
+                area += self.area_light_rows(light)
                 emitters.append((poly, light))
         env_image = load_environment(scene)
         env = []
@@ -156,7 +153,7 @@ class Forward(Technique):
             "u_n_area": len(area) // 3,
             "u_n_env": len(env) // 2,
         }
-        self._light_buffers = [self._ssbo(rows) for rows in (points_l, dirs, area, env)]
+        self._light_buffers = [self._ssbo(rows) for rows in (points_l, dirs, area, env, self.polygon_rows(scene))]
 
         self._emitters = []
         emitter_program = get_program(ctx, EMITTER_PROGRAM)
@@ -181,6 +178,44 @@ class Forward(Technique):
         self._near, self._far = clip_planes(np.asarray(cam.position, dtype=np.float64), all_points)
         self.timer = FrameTimer(ctx)
 
+    # ------------------------------------------------------------------ hooks for techniques built on this pass
+    #: the mesh shading program (techniques swap the fragment stage)
+    program_spec: ClassVar[ProgramSpec] = MESH_PROGRAM
+
+    def slots(self, material) -> dict[str, str]:
+        """GLSL include slots of the mesh program for one material."""
+        return {"BRDF": material.glsl}
+
+    def flags(self, material) -> dict[str, object]:
+        return {"OUTPUT": _OUTPUTS[self.params.output], **material.flags()}
+
+    def material_uniforms(self, material) -> dict[str, object]:
+        """Per-draw uniforms a technique adds for a material (besides the material's own)."""
+        return {}
+
+    def area_light_rows(self, light) -> list[tuple]:
+        """Rows of the area-sample buffer (binding 2) for one area light: the midpoint rule here."""
+        poly = light.polygon()
+        nl = polygon_normal(poly)
+        pts, dA = area_light_samples(poly, self.params.area_samples)
+        rows = []
+        for y, a in zip(pts, dA, strict=True):
+            rows += [(*y, a), (*nl, float(light.two_sided)), (*light.radiance, 0.0)]
+        return rows
+
+    def polygon_rows(self, scene: Scene) -> list[tuple]:
+        """Rows of the polygon-light buffer (binding 4), used by the area-light techniques; none here."""
+        return []
+
+    def frame_uniforms(self, frame: int, seed: int) -> dict[str, object]:
+        """Uniforms that change per frame (progressive techniques: frame index and seed)."""
+        return {}
+
+    def frames(self, spp: int) -> tuple[int, int]:
+        """(frames to accumulate, supersampling side s) for a requested spp; deterministic techniques
+        anti-alias with s×s samples."""
+        return 1, samples_per_pixel_side(spp)
+
     def _ssbo(self, rows: list[tuple]):
         data = np.asarray(rows, dtype=np.float32).reshape(-1, 4) if rows else np.zeros((1, 4), np.float32)
         buf = self.ctx.buffer(data.tobytes())
@@ -198,48 +233,65 @@ class Forward(Technique):
         if self.scene is None:
             raise RuntimeError("call prepare(scene) before render()")
         ctx = self.ctx
-        s = samples_per_pixel_side(spp)
+        n_frames, s = self.frames(spp)
         width, height = size or self.scene.camera.size
         view, proj = self.camera_matrices(width, height)
         view_proj = proj @ view
         vp_bytes = view_proj.T.astype(np.float32).tobytes()  # GLSL matrices are column-major
         target = HDRTarget(ctx, width * s, height * s)
+        total = None
         try:
-            with self.timer.frame():
-                target.use()
-                if self.params.output == "radiance":  # AOVs keep 0 where no surface is seen
-                    self._draw_background(view_proj)
-                ctx.enable(ctx.DEPTH_TEST)
-                ctx.disable(ctx.CULL_FACE)
-                for i, buf in enumerate(self._light_buffers):
-                    buf.bind_to_storage_buffer(i)
-                eye = tuple(float(c) for c in self.scene.camera.position)
-                for program, vao, uniforms, textures in self._draws:
-                    samplers = {}
-                    for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
-                        texture.use(unit)
-                        samplers[name] = unit
-                    uniforms = {**uniforms, **samplers}
-                    set_uniforms(program, {"u_view_proj": vp_bytes, "u_eye": eye, **self._light_counts, **uniforms})
-                    vao.render()
-                emitter_program = get_program(ctx, EMITTER_PROGRAM)
-                for vao, light in self._emitters if self.params.output == "radiance" else []:
-                    set_uniforms(
-                        emitter_program,
-                        {
-                            "u_view_proj": vp_bytes,
-                            "u_radiance": tuple(light.radiance),
-                            "u_two_sided": bool(light.two_sided),
-                        },
-                    )
-                    vao.render()
-                ctx.disable(ctx.DEPTH_TEST)
-                image = target.read()
+            for frame in range(n_frames):
+                with self.timer.frame():
+                    self._draw(target, view_proj, vp_bytes, frame, seed)
+                image = target.read()  # read-back is not part of the frame time
+                total = image.astype(np.float64) if total is None else total + image
         finally:
             target.release()
+        image = (total / n_frames).astype(np.float32)
         if s > 1:
             image = image.reshape(height, s, width, s, 3).mean(axis=(1, 3), dtype=np.float64).astype(np.float32)
         return image
+
+    def _draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
+        ctx = self.ctx
+        target.use()
+        if self.params.output == "radiance":  # AOVs keep 0 where no surface is seen
+            self._draw_background(view_proj)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.disable(ctx.CULL_FACE)
+        for i, buf in enumerate(self._light_buffers):
+            buf.bind_to_storage_buffer(i)
+        eye = tuple(float(c) for c in self.scene.camera.position)
+        for program, vao, uniforms, textures in self._draws:
+            samplers = {}
+            for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
+                texture.use(unit)
+                samplers[name] = unit
+            uniforms = {**uniforms, **samplers}
+            set_uniforms(
+                program,
+                {
+                    "u_view_proj": vp_bytes,
+                    "u_eye": eye,
+                    **self._light_counts,
+                    **uniforms,
+                    **self.frame_uniforms(frame, seed),
+                },
+            )
+            vao.render()
+        emitter_program = get_program(ctx, EMITTER_PROGRAM)
+        for vao, light in self._emitters if self.params.output == "radiance" else []:
+            set_uniforms(
+                emitter_program,
+                {
+                    "u_view_proj": vp_bytes,
+                    "u_radiance": tuple(light.radiance),
+                    "u_two_sided": bool(light.two_sided),
+                },
+            )
+            vao.render()
+        ctx.disable(ctx.DEPTH_TEST)
 
     def _draw_background(self, view_proj: np.ndarray) -> None:
         ctx = self.ctx

@@ -24,3 +24,17 @@ vec2 equirect_uv(vec3 d) {
     float u = atan(d.x, -d.z) / TWO_PI;
     return vec2(u - floor(u), acos(clamp(d.y, -1.0, 1.0)) / PI);
 }
+
+// Random numbers: PCG hash (Jarzynski & Olano 2020) seeded per pixel, frame and seed; same inputs, same numbers.
+uint pcg_hash(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+uint rng_seed(uvec2 pixel, uint frame, uint seed) {
+    return pcg_hash(pixel.x + pcg_hash(pixel.y + pcg_hash(frame + pcg_hash(seed))));
+}
+float rng_next(inout uint state) {
+    state = pcg_hash(state);
+    return float(state >> 8u) * (1.0 / 16777216.0);  // 24 bits: uniform in [0, 1)
+}
