@@ -22,7 +22,7 @@ from pydantic import Field
 from ...errors import ArgumentError
 from ...gpu import ProgramSpec
 from ...scene.model import PolygonLight, QuadLight, Scene
-from ..forward import ForwardParams, Forward, polygon_normal
+from ..forward import Forward, ForwardParams, polygon_normal
 
 SHADERS = "reflets/techniques/arealights/shaders/"
 POLY_STRIDE = 16
