@@ -4,4 +4,4 @@ Each module registers one method (``--method NAME``); see ``base.py`` for the sh
 docs/techniques/area-lights.md for what each approximates and how accurate and fast it is.
 """
 
-from . import analytic  # noqa: F401  (registers the methods)
+from . import adaptive, analytic, biased, brute, ltc, mc  # noqa: F401  (each registers its method)

@@ -1,0 +1,1 @@
+"""Area-light method 'biased' (being written)."""

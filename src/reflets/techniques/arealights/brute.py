@@ -1,0 +1,1 @@
+"""Area-light method 'brute' (being written)."""

@@ -1,0 +1,1 @@
+"""Area-light method 'ltc' (being written)."""

@@ -1,0 +1,1 @@
+"""Area-light method 'mc' (being written)."""
