@@ -10,8 +10,8 @@ from pathlib import Path
 
 from ..errors import ArgumentError, OutputError
 
-#: suite name → function(quick: bool) -> (results dict, markdown text)
-SUITES: dict[str, Callable[[bool], tuple[dict, str]]] = {}
+#: suite name → function(quick: bool, out_dir: Path) -> (results dict, markdown text); it may write more files
+SUITES: dict[str, Callable[[bool, Path], tuple[dict, str]]] = {}
 
 
 def register_suite(name: str):
@@ -42,7 +42,7 @@ def machine() -> dict:
 
 
 def run_suite(name: str, out_dir: Path, quick: bool = False) -> dict:
-    from . import reference  # noqa: F401  (registers its suite)
+    from . import arealights, reference  # noqa: F401  (register their suites)
 
     if name not in SUITES:
         raise ArgumentError(f"unknown suite '{name}'; allowed: {', '.join(sorted(SUITES))}", field="suite")
@@ -50,7 +50,7 @@ def run_suite(name: str, out_dir: Path, quick: bool = False) -> dict:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OutputError(f"cannot create the results folder ({exc.strerror})", file=out_dir) from None
-    results, markdown = SUITES[name](quick)
+    results, markdown = SUITES[name](quick, out_dir)
     info = machine()
     results = {"suite": name, "quick": quick, "machine": info, **results}
     gl = info["opengl"].get("renderer", info["opengl"].get("error", "?"))

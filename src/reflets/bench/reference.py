@@ -25,7 +25,7 @@ def _mitsuba_available() -> bool:
 
 
 @register_suite("reference")
-def bench_reference(quick: bool) -> tuple[dict, str]:
+def bench_reference(quick: bool, out_dir) -> tuple[dict, str]:
     from ..reference import reference
 
     size, spp, runs = ((48, 32), 16, 1) if quick else ((128, 96), 64, 3)

@@ -1,0 +1,214 @@
+"""`reflets bench arealights`: the area-light document's experiment, extended.
+
+A 4×4 plane and one unit square light at height 1 (camera (0, 3, 4), fov 45°), Phong ρ_d = 0, ρ_s = 1 with
+e ∈ {150, 200, 500} (the document's un-normalised form), GGX α ∈ {0.1, 0.3, 0.6} and Lambert; every method at
+several settings. For each: median frame time over ≥ 10 frames at 800×600 (draw only, read-back excluded;
+GPU timer queries on a real GPU, finish() + wall clock on llvmpipe), light samples evaluated per pixel (mean
+over the plane), and relative MSE and FLIP against the unoccluded NumPy reference. Errors are measured at
+200×150 (same camera) so the reference stays affordable; times at 800×600. Writes arealights.{json,md,png}.
+"""
+
+from __future__ import annotations
+
+import statistics
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import RefletsError
+from . import register_suite
+
+LIGHT = {"type": "quad", "corners": [[-0.5, 1, -0.5], [0.5, 1, -0.5], [-0.5, 1, 0.5]], "radiance": [5, 5, 5]}
+
+MATERIALS = {
+    "phong e=150": {"type": "phong", "kd": [0, 0, 0], "ks": [1, 1, 1], "exponent": 150},
+    "phong e=200": {"type": "phong", "kd": [0, 0, 0], "ks": [1, 1, 1], "exponent": 200},
+    "phong e=500": {"type": "phong", "kd": [0, 0, 0], "ks": [1, 1, 1], "exponent": 500},
+    "ggx a=0.1": {"type": "microfacet", "distribution": "ggx", "alpha": 0.1},
+    "ggx a=0.3": {"type": "microfacet", "distribution": "ggx", "alpha": 0.3},
+    "ggx a=0.6": {"type": "microfacet", "distribution": "ggx", "alpha": 0.6},
+    "lambert": {"type": "lambert", "albedo": [0.8, 0.8, 0.8]},
+}
+
+#: (curve label, method, parameters, spp)
+SETTINGS = (
+    [(f"brute {n}²", "brute", {"grid": n}, 1) for n in (4, 8, 16, 20, 32)]
+    + [("adaptive", "adaptive", {"dither": False}, 1), ("adaptive+dither", "adaptive", {"dither": True}, 1)]
+    + [(f"biased t={t} {n}²", "biased", {"threshold": t, "grid": n}, 1) for t in (0.99, 0.9) for n in (4, 8)]
+    + [(f"mc mis {s}spp", "mc", {"strategy": "mis", "samples": 16}, s) for s in (16, 64, 256)]
+    + [("mc two-region 64spp", "mc", {"strategy": "two_region", "samples": 16}, 64)]
+    + [("analytic", "analytic", {}, 1), ("ltc", "ltc", {}, 1)]
+)
+
+
+def scene_dict(material: dict, size=(800, 600)) -> dict:
+    return {
+        "camera": {"position": [0, 3, 4], "look_at": [0, 0, 0], "fov_y": 45, "size": list(size)},
+        "materials": {"m": material},
+        "mesh": [{"shape": "plane", "size": [4, 4], "material": "m"}],
+        "light": [LIGHT],
+    }
+
+
+def curve_of(label: str) -> str:
+    """The method family a setting belongs to (one plot curve each)."""
+    for prefix in ("brute", "adaptive", "biased t=0.99", "biased t=0.9", "mc mis", "mc two-region"):
+        if label.startswith(prefix):
+            return prefix
+    return label
+
+
+def _time_image(technique, size, spp: int, repeats: int) -> float:
+    """Median time of a whole image (all of a progressive method's frames), draw only."""
+    times = []
+    for _ in range(repeats):
+        timer = technique.timer
+        timer.wall_ms.clear()
+        timer.gpu_ms.clear()
+        technique.render(size=size, spp=spp)
+        times.append(sum(timer.gpu_ms) if timer.gpu_ms else sum(timer.wall_ms))
+    return statistics.median(times)
+
+
+@register_suite("arealights")
+def bench_arealights(quick: bool, out_dir: Path) -> tuple[dict, str]:
+    import reflets
+
+    from ..gpu import get_context
+    from ..metrics import flip, relmse
+    from ..techniques import get_technique
+
+    ctx = get_context()
+    time_size, error_size = ((200, 150), (100, 75)) if quick else ((800, 600), (200, 150))
+    frames, ref_spp = (3, 64) if quick else (10, 256)
+    materials = dict(list(MATERIALS.items())[:: (3 if quick else 1)])
+    rows = []
+    point_ms = None
+    for mat_name, material in materials.items():
+        scene = reflets.load_dict(scene_dict(material, time_size))
+        small = reflets.load_dict(scene_dict(material, error_size))
+        ref = reflets.reference(small, spp=ref_spp, visibility=False, progress=False)
+        emitter_free = _plane_mask(small)
+        if point_ms is None:  # the same plane with one point light: the cost floor of a shading pass
+            point_scene = reflets.load_dict(
+                {
+                    **scene_dict(material, time_size),
+                    "light": [{"type": "point", "position": [0, 1, 0], "intensity": [5, 5, 5]}],
+                }
+            )
+            forward = get_technique("forward")(ctx)
+            forward.prepare(point_scene)
+            point_ms = _time_image(forward, time_size, 1, frames)
+            forward.release()
+        for label, method, params, spp in SETTINGS:
+            try:
+                technique = get_technique(method)(ctx, **params)
+            except RefletsError as exc:
+                rows.append({"material": mat_name, "setting": label, "error": str(exc)})
+                continue
+            technique.prepare(scene)
+            ms = _time_image(technique, time_size, spp, frames)
+            technique.release()
+            image = reflets.render(small, method=method, spp=spp, **params)
+            counter = get_technique(method)(ctx, **{**params, "output": "samples"})
+            counter.prepare(small)
+            per_frame = params.get("samples", spp) if method == "mc" else spp
+            samples = counter.render(size=error_size, spp=per_frame)[..., 0]  # one frame's count
+            counter.release()
+            spp_factor = spp // per_frame if method == "mc" else 1
+            rows.append(
+                {
+                    "material": mat_name,
+                    "setting": label,
+                    "curve": curve_of(label),
+                    "method": method,
+                    "params": params,
+                    "spp": spp,
+                    "frame_ms": ms,
+                    "ratio_to_point_light": ms / point_ms,
+                    "samples_per_pixel": float(samples[emitter_free].mean() * spp_factor),
+                    "relmse": relmse(image[emitter_free][None], ref.image[emitter_free][None]),
+                    "flip": flip(
+                        np.where(emitter_free[..., None], image, 0), np.where(emitter_free[..., None], ref.image, 0)
+                    ),
+                }
+            )
+    plot(rows, out_dir / "arealights.png")
+    return {
+        "time_size": list(time_size),
+        "error_size": list(error_size),
+        "frames": frames,
+        "reference_spp": ref_spp,
+        "point_light_ms": point_ms,
+        "rows": rows,
+    }, _markdown(rows, time_size, error_size, frames, ref_spp, point_ms)
+
+
+def _plane_mask(scene) -> np.ndarray:
+    """Pixels whose camera ray hits the plane first (not the light's emitter, not the background)."""
+    from ..reference.geometry import MESHES, SceneGeometry
+    from ..scene.camera import pixel_rays
+
+    origin, dirs = pixel_rays(scene.camera)
+    hits = SceneGeometry(scene).intersect(np.broadcast_to(origin, dirs.shape).reshape(-1, 3), dirs.reshape(-1, 3))
+    return (hits.kind == MESHES).reshape(dirs.shape[:2])
+
+
+def _markdown(rows, time_size, error_size, frames, ref_spp, point_ms) -> str:
+    lines = [
+        "# Area lights: error vs time",
+        "",
+        f"Frame time: median of {frames} frames at {time_size[0]}×{time_size[1]} (draw only). Error: relative MSE "
+        f"(eps 0.01) and FLIP over the plane at {error_size[0]}×{error_size[1]} against the unoccluded NumPy "
+        f"reference ({ref_spp} spp). One point light on the same plane: {point_ms:.2f} ms per frame.",
+        "",
+        "| material | setting | ms / frame | × point light | samples / px | relMSE | FLIP |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        if "error" in r:
+            lines.append(f"| {r['material']} | {r['setting']} | — | — | — | — | {r['error']} |")
+            continue
+        lines.append(
+            f"| {r['material']} | {r['setting']} | {r['frame_ms']:.1f} | {r['ratio_to_point_light']:.1f} | "
+            f"{r['samples_per_pixel']:.1f} | {r['relmse']:.2e} | {r['flip']:.3f} |"
+        )
+    lines += ["", "![error vs time](arealights.png)", ""]
+    return "\n".join(lines)
+
+
+def plot(rows: list[dict], path: Path) -> None:
+    """Log-log error-vs-time plot, one panel per material, one curve per method family."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [r for r in rows if "error" not in r]
+    materials = list(dict.fromkeys(r["material"] for r in rows))
+    cols = min(4, len(materials))
+    fig, axes = plt.subplots(
+        (len(materials) + cols - 1) // cols,
+        cols,
+        figsize=(4.2 * cols, 3.6 * ((len(materials) + cols - 1) // cols)),
+        squeeze=False,
+    )
+    for ax, mat in zip(axes.ravel(), materials, strict=False):
+        for curve in dict.fromkeys(r["curve"] for r in rows):
+            pts = sorted(
+                (r["frame_ms"], max(r["relmse"], 1e-9)) for r in rows if r["material"] == mat and r["curve"] == curve
+            )
+            if pts:
+                ax.plot(*zip(*pts, strict=True), marker="o", label=curve)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(mat)
+        ax.set_xlabel("ms per frame")
+        ax.set_ylabel("relative MSE")
+        ax.grid(True, which="both", alpha=0.3)
+    for ax in axes.ravel()[len(materials) :]:
+        ax.axis("off")
+    axes.ravel()[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
