@@ -38,7 +38,7 @@ def render(
     method: str | None = None,
     size: tuple[int, int] | None = None,
     seed: int = 0,
-    spp: int = 1,
+    spp: int | None = None,
     **params: Any,
 ) -> np.ndarray:
     """Render ``scene`` and return linear HDR radiance, float32 (H, W, 3), row 0 = top.
@@ -49,7 +49,8 @@ def render(
     method : technique name (``reflets.techniques.TECHNIQUES``); default: the scene's ``method`` or "forward"
     size : (width, height) overriding the camera's size
     seed : seed of every random choice of the technique (same seed, same image)
-    spp : samples per pixel (for deterministic techniques: s×s anti-aliasing, s² = spp)
+    spp : samples per pixel; default: the technique's own (1 for deterministic techniques, where spp = s²
+        gives s×s anti-aliasing; one frame of ``samples`` for ``mc``)
     params : technique parameters (e.g. ``area_samples=16`` for "forward")
     """
     from .gpu import get_context

@@ -195,7 +195,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="output image (.exr, .png, .npy, .hdr); default SCENE_STEM.exr")
     p.add_argument("--size", help="WIDTHxHEIGHT, overrides the camera's size")
     p.add_argument("--method", help="technique name (see `reflets info`); default: the scene's, or forward")
-    p.add_argument("--spp", type=int, default=1, help="samples per pixel (default 1)")
+    p.add_argument(
+        "--spp",
+        type=int,
+        default=None,
+        help="samples per pixel (default: the method's own, 1 for deterministic methods)",
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument(
         "--param",

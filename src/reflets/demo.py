@@ -10,6 +10,7 @@ from __future__ import annotations
 import html
 import json
 import platform
+import statistics
 import time
 from dataclasses import asdict, dataclass
 from importlib import resources
@@ -28,13 +29,39 @@ REFERENCE_SPP = 32
 
 
 @dataclass(frozen=True)
+class Method:
+    """A technique as shown in the demo: its name, parameters and samples per pixel."""
+
+    name: str
+    params: tuple[tuple[str, object], ...] = ()
+    spp: int = 1
+
+    @property
+    def label(self) -> str:
+        extra = ",".join(f"{k}={v}" for k, v in self.params) + (f",spp={self.spp}" if self.spp > 1 else "")
+        return self.name + (f"[{extra}]" if extra else "")
+
+
+@dataclass(frozen=True)
 class DemoEntry:
     """A built-in scene (file in reflets/data/scenes), the methods shown for it, and whether the gallery also
-    shows the NumPy Monte Carlo reference next to them (with error metrics)."""
+    shows the NumPy Monte Carlo reference next to them (with error metrics; unoccluded when ``visibility`` is
+    False, as the area-light methods assume)."""
 
     scene: str
-    methods: tuple[str, ...] = ("forward",)
+    methods: tuple[Method, ...] = (Method("forward"),)
     reference: bool = False
+    visibility: bool = True
+
+
+AREA_METHODS = (
+    Method("brute", (("grid", 8),)),
+    Method("adaptive"),
+    Method("biased"),
+    Method("mc", (("strategy", "mis"),), spp=64),
+    Method("analytic"),
+    Method("ltc"),
+)
 
 
 #: later techniques add their scenes here
@@ -48,6 +75,8 @@ DEMO: list[DemoEntry] = [
     DemoEntry("10_ref_plane_quad.toml", reference=True),
     DemoEntry("11_ref_ggx_sphere_quad.toml", reference=True),
     DemoEntry("12_ref_sphere_env.toml", reference=True),
+    DemoEntry("20_arealight_phong.toml", AREA_METHODS, reference=True, visibility=False),
+    DemoEntry("21_arealight_ggx.toml", AREA_METHODS, reference=True, visibility=False),
 ]
 
 
@@ -92,12 +121,15 @@ def run_demo(out_dir: Path, size: tuple[int, int] | None = None) -> list[DemoRes
         transient=True,
     ) as progress:
         task = progress.add_task("demo", total=len(jobs))
+        references = {}
         for entry, method in jobs:
-            progress.update(task, description=f"{entry.scene} · {method}")
+            progress.update(task, description=f"{entry.scene} · {method.label}")
             result = _render_entry(ctx, entry.scene, method, size, out_dir)
             if entry.reference:
-                progress.update(task, description=f"{entry.scene} · NumPy reference, {REFERENCE_SPP} spp")
-                result.reference = _reference(entry.scene, size, out_dir, result)
+                if entry.scene not in references:
+                    progress.update(task, description=f"{entry.scene} · NumPy reference, {REFERENCE_SPP} spp")
+                    references[entry.scene] = _reference_image(entry, size, out_dir)
+                result.reference = _compare_with_reference(result, references[entry.scene], out_dir)
             results.append(result)
             progress.advance(task)
     info = gl_info()
@@ -109,18 +141,22 @@ def run_demo(out_dir: Path, size: tuple[int, int] | None = None) -> list[DemoRes
     return results
 
 
-def _render_entry(ctx, name: str, method: str, size, out_dir: Path) -> DemoResult:
+def _render_entry(ctx, name: str, method: Method, size, out_dir: Path) -> DemoResult:
     scene = load_scene(scene_path(name))
-    technique = get_technique(method)(ctx)
+    technique = get_technique(method.name)(ctx, **dict(method.params))
     start = time.perf_counter()
     technique.prepare(scene)
     prepare_ms = (time.perf_counter() - start) * 1e3
-    for _ in range(FRAMES):
-        image = technique.render(size=size)
-    timing = technique.timer.summary()
+    image_ms = []
+    for _ in range(FRAMES):  # a whole image: all frames of a progressive method, draw only
+        timer = technique.timer
+        timer.wall_ms.clear()
+        timer.gpu_ms.clear()
+        image = technique.render(size=size, spp=method.spp)
+        image_ms.append((sum(timer.gpu_ms), sum(timer.wall_ms)))
+    gpu_used = bool(technique.timer.gpu_ms)
     technique.release()
-    gpu = timing["gpu_ms_median"]
-    stem = f"{Path(name).stem}.{method}"
+    stem = f"{Path(name).stem}.{method.name}"
     write_image(out_dir / f"{stem}.exr", image)
     write_image(out_dir / f"{stem}.png", image)
     try:
@@ -132,37 +168,44 @@ def _render_entry(ctx, name: str, method: str, size, out_dir: Path) -> DemoResul
     return DemoResult(
         name=Path(name).stem,
         title=scene.title or Path(name).stem,
-        method=method,
+        method=method.label,
         size=f"{w}x{h}",
         prepare_ms=prepare_ms,
-        frame_ms=gpu if gpu is not None else timing["wall_ms_median"],
-        timer="GPU query" if gpu is not None else "wall clock (finish)",
+        frame_ms=statistics.median(t[0] if gpu_used else t[1] for t in image_ms),
+        timer="GPU query" if gpu_used else "wall clock (finish)",
         analytic_max_rel_error=error,
         exr=f"{stem}.exr",
         png=f"{stem}.png",
     )
 
 
-def _reference(name: str, size, out_dir: Path, result: DemoResult) -> dict:
-    """Render the NumPy reference of a demo scene and compare the technique's image with it."""
-    from .imageio import read_image, write_png8
-    from .metrics import compare, difference_image, zscores
+def _reference_image(entry: DemoEntry, size, out_dir: Path):
+    """The NumPy Monte Carlo reference of a demo scene (rendered once, shared by its methods)."""
     from .reference import reference
 
-    scene = load_scene(scene_path(name))
-    ref = reference(scene, spp=REFERENCE_SPP, size=size, progress=False)
+    scene = load_scene(scene_path(entry.scene))
+    ref = reference(scene, spp=REFERENCE_SPP, size=size, visibility=entry.visibility, progress=False)
+    stem = f"{Path(entry.scene).stem}.reference"
+    write_image(out_dir / f"{stem}.exr", ref.image)
+    write_image(out_dir / f"{stem}.stderr.exr", ref.stderr)
+    write_image(out_dir / f"{stem}.png", ref.image)
+    return ref, f"{stem}.png"
+
+
+def _compare_with_reference(result: DemoResult, reference, out_dir: Path) -> dict:
+    from .imageio import read_image, write_png8
+    from .metrics import compare, difference_image, zscores
+
+    ref, ref_png = reference
     image = read_image(out_dir / result.exr)
     stem = Path(result.exr).stem
-    write_image(out_dir / f"{stem}.reference.exr", ref.image)
-    write_image(out_dir / f"{stem}.reference.stderr.exr", ref.stderr)
-    write_image(out_dir / f"{stem}.reference.png", ref.image)
     write_png8(out_dir / f"{stem}.diff.png", difference_image(image, ref.image))
     return {
         **compare(image, ref.image),
         **zscores(image, ref.image, ref.stderr),
         "spp": REFERENCE_SPP,
         "seconds": ref.seconds,
-        "png": f"{stem}.reference.png",
+        "png": ref_png,
         "diff": f"{stem}.diff.png",
     }
 
@@ -182,7 +225,12 @@ def _print_summary(results: list[DemoResult], info: dict, out_dir: Path) -> None
         "relMSE vs reference",
         "within 3σ of reference",
     ):
-        table.add_column(col, justify="left" if col in ("scene", "method", "size") else "right")
+        table.add_column(
+            col,
+            justify="left" if col in ("scene", "method", "size") else "right",
+            overflow="fold",
+            min_width=24 if col == "method" else None,
+        )
     for r in results:
         err = "—" if r.analytic_max_rel_error is None else f"{r.analytic_max_rel_error:.2e}"
         ref = r.reference or {}

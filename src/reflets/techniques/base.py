@@ -43,8 +43,13 @@ class Technique:
     def prepare(self, scene: Scene) -> None:
         raise NotImplementedError
 
-    def render(self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int = 1) -> np.ndarray:
+    def render(self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int | None = None) -> np.ndarray:
         raise NotImplementedError
+
+    @property
+    def default_spp(self) -> int:
+        """Samples per pixel when the caller gives none (1: one sample at each pixel centre)."""
+        return 1
 
     def release(self) -> None:
         """Free GPU resources (the context itself stays)."""

@@ -229,11 +229,11 @@ class Forward(Technique):
         proj = perspective(cam.fov_y, width / height, self._near, self._far)
         return view, proj
 
-    def render(self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int = 1) -> np.ndarray:
+    def render(self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int | None = None) -> np.ndarray:
         if self.scene is None:
             raise RuntimeError("call prepare(scene) before render()")
         ctx = self.ctx
-        n_frames, s = self.frames(spp)
+        n_frames, s = self.frames(self.default_spp if spp is None else spp)
         width, height = size or self.scene.camera.size
         view, proj = self.camera_matrices(width, height)
         view_proj = proj @ view
