@@ -33,8 +33,8 @@ Point, directional and environment lights in the same scene are shaded as by `fo
 | where | the document | here |
 |---|---|---|
 | (2.12) Phong predictor inverse | exponent 0.4761 and −0.0017 | 1/2.0990 and + 0.0017 (the inverse of (2.11)) |
-| (2.13) Blinn predictor | exponent 2.4589 (Δ ≤ 0.05 almost always) | decided by measurement: see `adaptive` below |
-| (2.14–2.20) nearest point | divides by the edge length | divides by the squared edge length (right for any light size) |
+| (2.13) Blinn predictor | exponent 2.4589 (Δ ≤ 0.05 almost always) | 1/2.4589, by measurement (see `adaptive`) |
+| (2.14–2.20) nearest point | divides by the edge length | divides by the squared edge length (any light size) |
 | (2.35) two-region estimator | weights B/N, C/N | 2B/N, 2C/N |
 | Algorithm 1, rejection sampling | acceptance test reversed | accept when u ≤ p/(M q) |
 | (2.23) cone half-angle fit | used beyond e ≈ 300 | exact solution of (2.22) by default, the fit as an option |
