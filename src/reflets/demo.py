@@ -237,7 +237,7 @@ def _print_summary(results: list[DemoResult], info: dict, out_dir: Path) -> None
         rel = f"{ref['relmse']:.2e}" if ref else "—"
         within = f"{100 * ref['within_3_stderr']:.1f} %" if ref else "—"
         table.add_row(r.name, r.method, r.size, f"{r.prepare_ms:.0f}", f"{r.frame_ms:.1f}", err, rel, within)
-    console = Console(width=max(150, Console().width))
+    console = Console(width=max(190, Console().width))
     console.print(table)
     console.print(f"gallery: {out_dir / 'index.html'}")
 
