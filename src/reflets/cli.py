@@ -185,6 +185,28 @@ def cmd_demo(args) -> int:
     return 0
 
 
+def cmd_fit_ltc(args) -> int:
+    from .techniques.arealights.ltc_fit import fit_ltc
+
+    out = Path(args.output)
+    if out.suffix != ".npz":
+        raise ArgumentError(f"'{out}': an LTC table is written as .npz", field="-o")
+    progress = None if args.quiet else (lambda i, n: print(f"\r  view angle {i}/{n}", end="", file=sys.stderr))
+    table = fit_ltc(args.brdf, _params(args.param), args.size, progress=progress)
+    if progress is not None:
+        print(file=sys.stderr)
+    options = [f"--param {p}" for p in args.param] + ([f"--size {args.size}"] if args.size else [])
+    table.meta["command"] = " ".join(["reflets fit-ltc --brdf", args.brdf, *options, "-o", out.name])
+    table.save(out)
+    e = table.meta["error_summary"]
+    print(
+        f"wrote {out} ({table.meta['brdf']}, {table.size[0]}x{table.size[1]}, {table.meta['fit_seconds']:.1f} s); "
+        f"L1 fit error per cell: median {e['l1_median']:.4f}, mean {e['l1_mean']:.4f}, "
+        f"95th percentile {e['l1_p95']:.4f}, max {e['l1_max']:.4f}"
+    )
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="reflets", description=__doc__.splitlines()[0])
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
@@ -249,6 +271,26 @@ def build_parser() -> argparse.ArgumentParser:
         "adds mean_z, mean_abs_z, within_3_stderr",
     )
     p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("fit-ltc", help="fit a linearly-transformed-cosine table to a BRDF (for --method ltc)")
+    p.add_argument(
+        "--brdf",
+        required=True,
+        help="a family (ggx, beckmann, phong, blinn_phong, ward: a table over view angle x roughness) or any "
+        "material type (lambert, microfacet, lafortune, ashikhmin_shirley, measured, ...: one material)",
+    )
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="material parameter, repeatable (e.g. --param alpha=0.3 fixes a family's roughness: one material; "
+        "--param file=PATH for measured)",
+    )
+    p.add_argument("--size", type=int, help="entries per axis (default 64 for a family, 32 for one material)")
+    p.add_argument("-o", "--output", required=True, help="output table (.npz)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress")
+    p.set_defaults(func=cmd_fit_ltc)
 
     p = sub.add_parser("info", help="OpenGL driver, methods and package versions")
     p.add_argument("--json", action="store_true")

@@ -126,7 +126,8 @@ class Forward(Technique):
             )
             self._objects += [vbo, ibo, vao]
             uniforms = {**material.uniforms(), **self.material_uniforms(material)}
-            self._draws.append((program, vao, uniforms, material.textures(ctx)))
+            textures = {**material.textures(ctx), **self.material_textures(material)}
+            self._draws.append((program, vao, uniforms, textures))
 
         points_l, dirs, area, emitters = [], [], [], []
         for light in scene.light:
@@ -191,6 +192,11 @@ class Forward(Technique):
 
     def material_uniforms(self, material) -> dict[str, object]:
         """Per-draw uniforms a technique adds for a material (besides the material's own)."""
+        return {}
+
+    def material_textures(self, material) -> dict[str, object]:
+        """Per-draw textures a technique adds for a material, by sampler uniform name (bound after the
+        material's own, from texture unit 1 on); the technique releases them (e.g. via ``self._objects``)."""
         return {}
 
     def area_light_rows(self, light) -> list[tuple]:

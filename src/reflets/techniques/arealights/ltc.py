@@ -1,1 +1,233 @@
-"""Area-light method 'ltc' (being written)."""
+"""``ltc``: Linearly Transformed Cosines (Heitz, Dupuy, Hill & Neubelt, SIGGRAPH 2016) for polygon lights.
+
+For a view angle θ and roughness the material's lobe f·cos is approximated by ``A · D_M``: A = ∫ f cos dω (the
+directional albedo) and D_M the clamped cosine transformed by a 3×3 matrix M; the polygon integral of D_M
+is Lambert's formula (after clipping to z ≥ 0) on the polygon transformed by M⁻¹. M⁻¹ and A come from a table
+(``ltc_fit.py``: the fitter, the file format and the lookup parameterisation). Per draw, the table is chosen
+from the material:
+
+- microfacet GGX / Beckmann, ``fresnel = "none"``, separable masking: the shipped family table
+  (``data/ltc/ggx.npz``, ``beckmann.npz``) at α — for an anisotropic α the geometric mean sqrt(α_x α_y), an
+  isotropic approximation of the lobe (its width is right on average, its elongation is lost) — times
+  ``specular``;
+- normalised Phong / Blinn-Phong: the shipped table at the equivalent α = sqrt(2/(e + 2)), times ``ks``
+  (the table spans e ∈ [0, 10⁶], the whole parameter range);
+- Ward ``variant = "duer"``: the shipped table at sqrt(α_x α_y), times ``ks``;
+- every other material (Fresnel modes, correlated masking, un-normalised Phong / Blinn-Phong, original Ward,
+  Lafortune, Ashikhmin–Shirley, measured): a one-material table over θ only, fitted at ``prepare`` with the
+  exact material (~1 s), cached in memory and in ``$XDG_CACHE_HOME/reflets/ltc`` (default ``~/.cache``) under
+  a hash of the material's parameters (and, for a measured file, its size and modification time).
+
+A Lambertian term (``kd`` / ``diffuse`` / ``albedo``) is split off and integrated exactly (identity matrix);
+the table fits the rest of the BRDF. Ashikhmin–Shirley's coupled diffuse term and measured data are not
+Lambertian and stay in the fitted lobe (one LTC for the whole BRDF). A coloured lobe (conductor Fresnel,
+measured) shares one shape (fitted to its luminance) with a magnitude per RGB channel.
+
+One- and two-sided lights: a one-sided light seen from behind contributes nothing; the absolute value of the
+edge sum makes a two-sided light right from either side. No shadows from other objects (as every area-light
+method); compare with ``reflets.reference(..., visibility=False)``.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import os
+import zipfile
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import ClassVar
+
+import moderngl
+import numpy as np
+
+from ...errors import RefletsError
+from ...gpu import ProgramSpec
+from ..base import register_technique
+from . import ltc_fit
+from .base import AREA_PROGRAM, SHADERS, AreaLightTechnique
+from .ltc_fit import FAMILIES, LtcTable
+
+LTC_PROGRAM = ProgramSpec(
+    "arealight_ltc",
+    vertex=AREA_PROGRAM.vertex,
+    fragment=AREA_PROGRAM.fragment,
+    flags=AREA_PROGRAM.flags
+    | {"LTC_SIZE_THETA", "LTC_SIZE_ROUGH", "LTC_EDGE_P", "LTC_EDGE_Q", "LTC_DIFFUSE", "LTC_LOBE"},
+)
+#: the Lambertian parameter of each material type (split off and integrated exactly)
+DIFFUSE_PARAMETER = {"phong": "kd", "blinn_phong": "kd", "ward": "kd", "lafortune": "kd", "microfacet": "diffuse"}
+#: θ entries of the one-material tables fitted at prepare time
+INSTANCE_SIZE = 32
+
+
+@functools.cache
+def shipped_table(family: str) -> LtcTable:
+    """The table shipped for a family (``reflets/data/ltc/<family>.npz``)."""
+    with resources.files("reflets").joinpath("data", "ltc", f"{family}.npz").open("rb") as fh:
+        return LtcTable.load(fh)
+
+
+def split_diffuse(material) -> tuple[tuple[float, float, float], object | None]:
+    """(Lambertian albedo, the material without it — None when nothing is left)."""
+    if material.type == "lambert":
+        return tuple(float(c) for c in material.albedo), None
+    name = DIFFUSE_PARAMETER.get(material.type)
+    if name is None:
+        return (0.0, 0.0, 0.0), material
+    diffuse = tuple(float(c) for c in getattr(material, name))
+    lobe = material.model_copy(update={name: (0.0, 0.0, 0.0)})
+    scale = getattr(lobe, "ks", None) if lobe.type != "lafortune" else None
+    if scale is not None and max(scale) == 0.0:
+        return diffuse, None
+    return diffuse, lobe
+
+
+@dataclass(frozen=True)
+class LtcChoice:
+    """How the ltc method shades one material: the table, the roughness coordinate in it, the RGB factor on
+    its magnitude, the Lambertian albedo, and where the table came from ("ggx", …, or "material")."""
+
+    table: LtcTable | None
+    roughness: float
+    scale: tuple[float, float, float]
+    diffuse: tuple[float, float, float]
+    source: str
+
+
+def _family_of(lobe) -> str | None:
+    t = lobe.type
+    if t == "microfacet" and lobe.fresnel == "none" and lobe.masking == "separable":
+        return lobe.distribution
+    if t in ("phong", "blinn_phong") and lobe.normalized:
+        return t
+    if t == "ward" and lobe.variant == "duer":
+        return "ward"
+    return None
+
+
+def choose_table(material) -> LtcChoice:
+    """The table, roughness coordinate and factors for a material (rules in the module docstring)."""
+    diffuse, lobe = split_diffuse(material)
+    if lobe is None:
+        return LtcChoice(None, 0.0, (0.0, 0.0, 0.0), diffuse, "none")
+    family = _family_of(lobe)
+    if family is not None:
+        spec = FAMILIES[family]
+        scale = lobe.specular if lobe.type == "microfacet" else lobe.ks
+        table = shipped_table(family)
+        r = float(ltc_fit.roughness_coordinate(spec.alpha(lobe), table.meta["alpha_min"]))
+        return LtcChoice(table, r, tuple(float(c) for c in scale), diffuse, family)
+    return LtcChoice(fitted_table(lobe), 0.0, (1.0, 1.0, 1.0), diffuse, "material")
+
+
+# ------------------------------------------------------------------------------ one-material tables
+
+
+_MEMORY: dict[str, LtcTable] = {}
+
+
+def cache_dir() -> Path:
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "reflets" / "ltc"
+
+
+@functools.cache
+def _fitter_hash() -> str:
+    return hashlib.sha256(Path(ltc_fit.__file__).read_bytes()).hexdigest()
+
+
+def material_key(material, n_theta: int = INSTANCE_SIZE) -> str:
+    """Hash of everything a one-material table depends on (the fitter's source included: a changed fitter
+    refits)."""
+    data = {
+        "material": material.model_dump(mode="json"),
+        "fitter": _fitter_hash(),
+        "n_theta": n_theta,
+        "settings": ltc_fit.FitSettings().__dict__,
+    }
+    if material.type == "measured":
+        try:
+            st = Path(material.file).stat()
+            data["file_stat"] = [st.st_size, st.st_mtime_ns]
+        except OSError:
+            pass
+    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:32]
+
+
+def fitted_table(material, n_theta: int = INSTANCE_SIZE) -> LtcTable:
+    """The one-material table of ``material`` (memory cache, then disk cache, then a fit)."""
+    key = material_key(material, n_theta)
+    if key in _MEMORY:
+        return _MEMORY[key]
+    path = cache_dir() / f"{key}.npz"
+    table = None
+    if path.is_file():
+        try:
+            table = LtcTable.load(path)
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile, RefletsError):
+            table = None  # a stale or broken cache entry is refitted
+    if table is None:
+        table = ltc_fit.fit_material(material, n_theta)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")
+            table.save(tmp)
+            tmp.replace(path)
+        except OSError:
+            pass  # a read-only cache only costs the refit next time
+    _MEMORY[key] = table
+    return table
+
+
+# ------------------------------------------------------------------------------ the technique
+
+
+@register_technique
+class Ltc(AreaLightTechnique):
+    """Polygon lights by Linearly Transformed Cosines, fitted tables per BRDF (see the module docstring)."""
+
+    name: ClassVar[str] = "ltc"
+    summary: ClassVar[str] = "area lights: linearly transformed cosines (fitted tables for every BRDF)"
+    area_glsl: ClassVar[str] = SHADERS + "ltc.glsl"
+    program_spec: ClassVar[ProgramSpec] = LTC_PROGRAM
+
+    def _choice(self, material) -> LtcChoice:
+        cache = self.__dict__.setdefault("_choices", {})
+        key = material.model_dump_json()
+        if key not in cache:
+            cache[key] = choose_table(material)
+        return cache[key]
+
+    def flags(self, material) -> dict[str, object]:
+        choice = self._choice(material)
+        size = choice.table.size if choice.table is not None else (1, 1)
+        defines = ltc_fit.glsl_defines(size, diffuse=max(choice.diffuse) > 0.0, lobe=choice.table is not None)
+        return {**super().flags(material), **defines}
+
+    def material_uniforms(self, material) -> dict[str, object]:
+        choice = self._choice(material)
+        return {
+            **super().material_uniforms(material),
+            "a_ltc_roughness": choice.roughness,
+            "a_ltc_scale": choice.scale,
+            "a_ltc_diffuse": choice.diffuse,
+        }
+
+    def material_textures(self, material) -> dict[str, object]:
+        table = self._choice(material).table
+        if table is None:
+            return {}
+        textures = {}
+        size = table.size
+        magnitude = np.concatenate([table.magnitude, np.zeros(table.magnitude.shape[:2] + (1,), np.float32)], axis=-1)
+        for name, data in (("a_ltc_minv", table.minv), ("a_ltc_magnitude", magnitude)):  # RGBA: faster than RGB
+            data = np.ascontiguousarray(data, dtype=np.float32)
+            tex = self.ctx.texture(size, data.shape[-1], data.tobytes(), dtype="f4")
+            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            tex.repeat_x = tex.repeat_y = False
+            self._objects.append(tex)
+            textures[name] = tex
+        return textures

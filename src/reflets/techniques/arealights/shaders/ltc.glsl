@@ -1,0 +1,106 @@
+// Provides area_light_contribution() for the "ltc" method: Linearly Transformed Cosines (Heitz, Dupuy, Hill &
+// Neubelt 2016). The material's lobe f·cos ≈ magnitude · D_M, D_M the clamped cosine seen through a 3×3 matrix
+// M looked up per (view angle, roughness) in a table fitted by ltc_fit.py; the polygon integral of D_M is the
+// clamped cosine's integral over the polygon M⁻¹P (Lambert's formula after clipping to z ≥ 0). The Lambertian
+// term ρ_d/π is integrated with the identity matrix. Defines (from ltc.py / ltc_fit.py): LTC_SIZE_THETA,
+// LTC_SIZE_ROUGH (the table's size), LTC_EDGE_P, LTC_EDGE_Q (θ/sinθ approximation), LTC_DIFFUSE and LTC_LOBE
+// (1 when the material has a Lambertian term / a fitted lobe: compile-time, since a software rasteriser runs
+// both sides of a branch).
+
+uniform sampler2D a_ltc_minv;       // (m02, m11, m20, m22) of a multiple of M⁻¹ = [[1,0,m02],[0,m11,0],[m20,0,m22]]
+uniform sampler2D a_ltc_magnitude;  // ∫ f cos dω per RGB channel (alpha unused)
+uniform float a_ltc_roughness;      // the material's roughness coordinate r ∈ [0, 1] (0 for one-material tables)
+uniform vec3 a_ltc_scale;           // RGB factor on the table's magnitude (specular / ks of the material)
+uniform vec3 a_ltc_diffuse;         // Lambertian albedo ρ_d
+
+// Texture coordinates of (cosθ, r): mirrors ltc_fit.lookup_coordinates (axis u = sqrt(1 − cosθ); entry i of
+// n at the texel centre (i + ½)/n, so bilinear filtering interpolates between fitted cells).
+vec2 ltc_lookup(float cos_theta, float roughness) {
+    vec2 n = vec2(float(LTC_SIZE_THETA), float(LTC_SIZE_ROUGH));
+    vec2 c = vec2(sqrt(1.0 - clamp(cos_theta, 0.0, 1.0)), clamp(roughness, 0.0, 1.0));
+    return (c * (n - 1.0) + 0.5) / n;
+}
+
+// θ/sinθ for x = cosθ ∈ [−1, 1], given 1/sinθ: a rational fit on [0, 1] (relative error 6e-7,
+// ltc_fit.fit_theta_over_sin), and θ(x) = π − θ(−x) below 0, where π/sinθ needs an accurate sinθ.
+float ltc_theta_over_sin(float x, float inv_sin_theta) {
+    float y = abs(x);
+    float r = (LTC_EDGE_P.x + y * (LTC_EDGE_P.y + y * LTC_EDGE_P.z)) / (1.0 + y * (LTC_EDGE_Q.x + y * LTC_EDGE_Q.y));
+    return x >= 0.0 ? r : PI * inv_sin_theta - r;
+}
+
+// Edge term θ (Γ·z) of unit vectors a → b: θ/sinθ · (a × b).z with sinθ = |a × b| (not sqrt(1 − cos²θ),
+// which cancels for nearly opposite a and b — the horizon edge of a clipped polygon can span almost π).
+float ltc_edge(vec3 a, vec3 b) {
+    vec3 c = cross(a, b);
+    return ltc_theta_over_sin(dot(a, b), inversesqrt(max(dot(c, c), 1e-30))) * c.z;
+}
+
+// One edge a → b (unit vectors) of a polygon clipped to z ≥ 0, without building the clipped polygon: the part of
+// the edge above the horizon contributes its edge term; where the edge leaves (enters) the upper hemisphere its
+// crossing point is kept as the exit (entry) point. A convex polygon crosses the horizon at most twice, and the
+// clipped polygon closes with one horizon edge from the exit to the entry point (ltc_polygon_integral).
+// The crossing direction is a.z b − b.z a (z = 0), turned to point between a and b: no division.
+void ltc_clipped_edge(vec3 a, vec3 b, inout float sum, inout vec3 exit_point, inout vec3 entry_point) {
+    bool above_a = a.z >= 0.0, above_b = b.z >= 0.0;
+    vec2 q = (a.z * b.xy - b.z * a.xy) * (above_a ? 1.0 : -1.0);
+    vec3 p = vec3(q * inversesqrt(max(dot(q, q), 1e-30)), 0.0);
+    float term = ltc_edge(above_a ? a : p, above_b ? b : p);
+    sum += (above_a || above_b) ? term : 0.0;
+    if (above_a && !above_b) exit_point = p;
+    if (!above_a && above_b) entry_point = p;
+}
+
+// ∫ max(0, ω_z)/π dω over the spherical polygon of light i's vertices, transformed by T after subtracting x:
+// (1/2π)|Σ θ_k Γ_k·z| over the polygon clipped to z ≥ 0 (Lambert's formula). The absolute value makes either
+// winding right, which is how a two-sided light seen from behind is handled. No local arrays (the vertices
+// stream from the light buffer), no data-dependent loop: this is what keeps it fast on SIMD rasterisers.
+float ltc_polygon_integral(int i, int n, mat3 T, vec3 x) {
+    vec3 first = normalize(T * (area_vertex(i, 0) - x));
+    vec3 a = first;
+    vec3 exit_point = vec3(0.0), entry_point = vec3(0.0);
+    float sum = 0.0;
+    for (int k = 1; k < n; ++k) {
+        vec3 b = normalize(T * (area_vertex(i, k) - x));
+        ltc_clipped_edge(a, b, sum, exit_point, entry_point);
+        a = b;
+    }
+    ltc_clipped_edge(a, first, sum, exit_point, entry_point);
+    sum += ltc_edge(exit_point, entry_point);  // 0 when nothing was clipped (both stay 0)
+    return abs(sum) * (0.5 * INV_PI);
+}
+
+// Per fragment, shared by all lights: world → (rotated local frame, view in the xz plane) → M⁻¹, and the
+// lobe's magnitude.
+bool g_ltc_ready = false;
+mat3 g_ltc_transform;
+vec3 g_ltc_lobe;
+
+void ltc_setup(mat3 frame, vec3 wo) {
+    vec2 uv = ltc_lookup(wo.z, a_ltc_roughness);
+    vec4 m = texture(a_ltc_minv, uv);
+    g_ltc_lobe = texture(a_ltc_magnitude, uv).rgb * a_ltc_scale;
+    float len2 = dot(wo.xy, wo.xy);
+    vec2 c = len2 > 1e-14 ? wo.xy * inversesqrt(len2) : vec2(1.0, 0.0);
+    // rows of (rotation about the normal bringing wo into the xz plane) · transpose(frame), in world space
+    vec3 r0 = c.x * frame[0] + c.y * frame[1];
+    vec3 r1 = c.x * frame[1] - c.y * frame[0];
+    vec3 n = frame[2];
+    // times M⁻¹ = [[1, 0, m02], [0, m11, 0], [m20, 0, m22]] (rows)
+    g_ltc_transform = transpose(mat3(r0 + m.x * n, m.y * r1, m.z * r0 + m.w * n));
+    g_ltc_ready = true;
+}
+
+vec3 area_light_contribution(int i, vec3 x, mat3 frame, vec3 wo) {
+    AreaLight L = area_light(i);
+    if (!area_light_faces(L, x)) return vec3(0.0);
+    vec3 sum = vec3(0.0);
+#if LTC_DIFFUSE
+    sum += a_ltc_diffuse * ltc_polygon_integral(i, L.n, transpose(frame), x);
+#endif
+#if LTC_LOBE
+    if (!g_ltc_ready) ltc_setup(frame, wo);
+    sum += g_ltc_lobe * ltc_polygon_integral(i, L.n, g_ltc_transform, x);
+#endif
+    return sum * L.radiance;
+}
