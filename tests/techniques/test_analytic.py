@@ -43,8 +43,14 @@ def test_horizon_clipping_agrees_with_the_unoccluded_reference():
     """A two-sided light crossing the plane: half of it is below every point's horizon."""
     scene_dict = copy.deepcopy(SCENE)
     scene_dict["camera"]["size"] = [80, 60]
-    scene_dict["light"] = [{"type": "quad", "corners": [[-0.5, -0.3, 0.2], [0.5, -0.3, 0.2], [-0.5, 0.7, 0.2]],
-                            "radiance": [3, 3, 3], "two_sided": True}]
+    scene_dict["light"] = [
+        {
+            "type": "quad",
+            "corners": [[-0.5, -0.3, 0.2], [0.5, -0.3, 0.2], [-0.5, 0.7, 0.2]],
+            "radiance": [3, 3, 3],
+            "two_sided": True,
+        }
+    ]
     scene = reflets.load_dict(scene_dict)
     image = reflets.render(scene, method="analytic")
     ref = reflets.reference(scene, spp=128, visibility=False, progress=False)

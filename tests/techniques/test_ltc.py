@@ -345,6 +345,16 @@ def test_several_lights_add_up(ctx):
     np.testing.assert_allclose(both[mask], a[mask] + b[mask], rtol=1e-5, atol=1e-6)
 
 
+def test_light_records_read_from_uniforms_or_from_the_light_buffer_agree(ctx, monkeypatch):
+    other = {"type": "quad", "corners": [[1.5, 0.3, -0.5], [1.5, 0.3, 0.5], [1.5, 1.3, -0.5]], "radiance": [1, 2, 3]}
+    scene = bench_scene({"type": "microfacet", "alpha": 0.2, "diffuse": [0.3, 0.3, 0.3]}, [LIGHT_DOWN, other])
+    uniforms = reflets.render(scene, method="ltc", size=SIZE)
+    monkeypatch.setattr(ltc_module, "UNIFORM_LIGHTS", 1)  # two lights do not fit: the shader reads the buffer
+    buffer = reflets.render(scene, method="ltc", size=SIZE)
+    assert np.max(uniforms) > 0
+    np.testing.assert_array_equal(uniforms, buffer)
+
+
 # ------------------------------------------------------------------------------ table choice and the cache
 
 

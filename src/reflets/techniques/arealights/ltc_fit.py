@@ -276,9 +276,12 @@ def fit_theta_over_sin(samples: int = 20001, rounds: int = 60) -> tuple[np.ndarr
     return c[:3], c[3:], float(np.max(np.abs(rel(c))))
 
 
-def glsl_defines(size: tuple[int, int], diffuse: bool = True, lobe: bool = True) -> dict[str, str | int]:
+def glsl_defines(
+    size: tuple[int, int], diffuse: bool = True, lobe: bool = True, uniform_lights: int = 0
+) -> dict[str, str | int]:
     """The ``#define``s ltc.glsl needs: the table's ``size`` = (n_theta, n_rough), the edge-integral
-    coefficients, and whether the material has a Lambertian term and a fitted lobe."""
+    coefficients, whether the material has a Lambertian term and a fitted lobe, and the capacity of the
+    uniform copy of the light records (0: read the light buffer)."""
     return {
         "LTC_SIZE_THETA": int(size[0]),
         "LTC_SIZE_ROUGH": int(size[1]),
@@ -286,6 +289,7 @@ def glsl_defines(size: tuple[int, int], diffuse: bool = True, lobe: bool = True)
         "LTC_EDGE_Q": "vec2({:.8g}, {:.8g})".format(*EDGE_Q),
         "LTC_DIFFUSE": int(diffuse),
         "LTC_LOBE": int(lobe),
+        "LTC_UNIFORM_LIGHTS": int(uniform_lights),
     }
 
 

@@ -5,13 +5,23 @@
 // term ρ_d/π is integrated with the identity matrix. Defines (from ltc.py / ltc_fit.py): LTC_SIZE_THETA,
 // LTC_SIZE_ROUGH (the table's size), LTC_EDGE_P, LTC_EDGE_Q (θ/sinθ approximation), LTC_DIFFUSE and LTC_LOBE
 // (1 when the material has a Lambertian term / a fitted lobe: compile-time, since a software rasteriser runs
-// both sides of a branch).
+// both sides of a branch), LTC_UNIFORM_LIGHTS (> 0: the polygon-light records, in the layout of the light
+// buffer, also come as a uniform array of that many lights, read instead of the buffer: uniform loads are
+// broadcasts, buffer loads are per-pixel gathers on llvmpipe).
 
 uniform sampler2D a_ltc_minv;       // (m02, m11, m20, m22) of a multiple of M⁻¹ = [[1,0,m02],[0,m11,0],[m20,0,m22]]
 uniform sampler2D a_ltc_magnitude;  // ∫ f cos dω per RGB channel (alpha unused)
 uniform float a_ltc_roughness;      // the material's roughness coordinate r ∈ [0, 1] (0 for one-material tables)
 uniform vec3 a_ltc_scale;           // RGB factor on the table's magnitude (specular / ks of the material)
 uniform vec3 a_ltc_diffuse;         // Lambertian albedo ρ_d
+
+#if LTC_UNIFORM_LIGHTS > 0
+uniform vec4 a_ltc_lights[LTC_UNIFORM_LIGHTS * POLY_STRIDE];
+vec4 ltc_light_row(int i, int row) { return a_ltc_lights[i * POLY_STRIDE + row]; }
+#else
+vec4 ltc_light_row(int i, int row) { return poly_data[i * POLY_STRIDE + row]; }
+#endif
+vec3 ltc_vertex(int i, int k) { return ltc_light_row(i, 5 + k).xyz; }
 
 // Texture coordinates of (cosθ, r): mirrors ltc_fit.lookup_coordinates (axis u = sqrt(1 − cosθ); entry i of
 // n at the texel centre (i + ½)/n, so bilinear filtering interpolates between fitted cells).
@@ -56,12 +66,12 @@ void ltc_clipped_edge(vec3 a, vec3 b, inout float sum, inout vec3 exit_point, in
 // winding right, which is how a two-sided light seen from behind is handled. No local arrays (the vertices
 // stream from the light buffer), no data-dependent loop: this is what keeps it fast on SIMD rasterisers.
 float ltc_polygon_integral(int i, int n, mat3 T, vec3 x) {
-    vec3 first = normalize(T * (area_vertex(i, 0) - x));
+    vec3 first = normalize(T * (ltc_vertex(i, 0) - x));
     vec3 a = first;
     vec3 exit_point = vec3(0.0), entry_point = vec3(0.0);
     float sum = 0.0;
     for (int k = 1; k < n; ++k) {
-        vec3 b = normalize(T * (area_vertex(i, k) - x));
+        vec3 b = normalize(T * (ltc_vertex(i, k) - x));
         ltc_clipped_edge(a, b, sum, exit_point, entry_point);
         a = b;
     }
@@ -92,15 +102,19 @@ void ltc_setup(mat3 frame, vec3 wo) {
 }
 
 vec3 area_light_contribution(int i, vec3 x, mat3 frame, vec3 wo) {
-    AreaLight L = area_light(i);
-    if (!area_light_faces(L, x)) return vec3(0.0);
+    vec4 head = ltc_light_row(i, 0);     // radiance, two-sided
+    vec4 corner = ltc_light_row(i, 1);   // c1, vertex count
+    vec3 normal = ltc_light_row(i, 4).xyz;
+    float side = dot(x - corner.xyz, normal);  // as area_light_faces(): on an emitting side?
+    if (!(head.w > 0.5 ? side != 0.0 : side > 0.0)) return vec3(0.0);
+    int n = int(corner.w + 0.5);
     vec3 sum = vec3(0.0);
 #if LTC_DIFFUSE
-    sum += a_ltc_diffuse * ltc_polygon_integral(i, L.n, transpose(frame), x);
+    sum += a_ltc_diffuse * ltc_polygon_integral(i, n, transpose(frame), x);
 #endif
 #if LTC_LOBE
     if (!g_ltc_ready) ltc_setup(frame, wo);
-    sum += g_ltc_lobe * ltc_polygon_integral(i, L.n, g_ltc_transform, x);
+    sum += g_ltc_lobe * ltc_polygon_integral(i, n, g_ltc_transform, x);
 #endif
-    return sum * L.radiance;
+    return sum * head.rgb;
 }
