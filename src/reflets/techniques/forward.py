@@ -261,9 +261,9 @@ class Forward(Technique):
 
     def _draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
         ctx = self.ctx
-        target.use()
-        if self.params.output == "radiance":  # AOVs keep 0 where no surface is seen
-            self._draw_background(view_proj)
+        radiance = self.params.output == "radiance"  # AOVs keep 0 where no surface is seen
+        color = self.scene.background_color() if radiance else (0.0, 0.0, 0.0)
+        target.use(clear=(*(color if color is not None else (0.0, 0.0, 0.0)), 1.0))  # a constant background is a clear
         ctx.enable(ctx.DEPTH_TEST)
         ctx.disable(ctx.CULL_FACE)
         for i, buf in enumerate(self._light_buffers):
@@ -297,11 +297,17 @@ class Forward(Technique):
                 },
             )
             vao.render()
+        if radiance and color is None:
+            # The environment last, only where the depth buffer is still clear (llvmpipe then skips the
+            # covered pixels: a full-screen background pass first cost 4× the clear at 800×600).
+            ctx.depth_func = "<="
+            self._draw_background(view_proj)
+            ctx.depth_func = "<"
         ctx.disable(ctx.DEPTH_TEST)
 
     def _draw_background(self, view_proj: np.ndarray) -> None:
+        """The environment map along every camera ray (a full-screen triangle at the far plane)."""
         ctx = self.ctx
-        ctx.disable(ctx.DEPTH_TEST)
         color = self.scene.background_color()
         uniforms = {
             "u_inv_view_proj": np.linalg.inv(view_proj).T.astype(np.float32).tobytes(),
