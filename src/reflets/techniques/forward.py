@@ -307,18 +307,14 @@ class Forward(Technique):
 
     def _draw_background(self, view_proj: np.ndarray) -> None:
         """The environment map along every camera ray (a full-screen triangle at the far plane)."""
-        ctx = self.ctx
-        color = self.scene.background_color()
+        rot = rotation_y(self.scene.environment.rotate_y)
+        self._env_texture.use(0)
         uniforms = {
             "u_inv_view_proj": np.linalg.inv(view_proj).T.astype(np.float32).tobytes(),
-            "u_use_env": color is None,
-            "u_color": tuple(color) if color is not None else (0.0, 0.0, 0.0),
+            "u_use_env": True,
+            "u_env_from_world": rot.astype(np.float32).tobytes(),  # R^T: column-major bytes of row-major R
+            "u_env": 0,
         }
-        if color is None:
-            rot = rotation_y(self.scene.environment.rotate_y)
-            uniforms["u_env_from_world"] = rot.astype(np.float32).tobytes()  # R^T, column-major = R row-major
-            self._env_texture.use(0)
-            uniforms["u_env"] = 0
         set_uniforms(self._background, uniforms)
         self._background_vao.render(vertices=3)
 
