@@ -47,15 +47,17 @@ def plane_mask(scene) -> np.ndarray:
     mask = (np.abs(positions[..., 1]) < 1e-4) & np.any(positions != 0, axis=-1)
     eye = np.asarray(scene.camera.position, dtype=np.float64)
     for light in scene.light:
-        c1, c2, _, c4 = light.polygon()
-        e1, e2 = c2 - c1, c4 - c1
-        normal = np.cross(e1, e2)
+        poly = light.polygon()
+        normal = np.cross(poly[1] - poly[0], poly[2] - poly[0])
         d = positions - eye
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = ((c1 - eye) @ normal) / (d @ normal)
-            q = eye + t[..., None] * d - c1
-            u, v = q @ e1 / (e1 @ e1), q @ e2 / (e2 @ e2)
-            mask &= ~((t > 0) & (t < 1) & (u >= 0) & (u <= 1) & (v >= 0) & (v <= 1))
+            t = ((poly[0] - eye) @ normal) / (d @ normal)
+            q = eye + t[..., None] * d
+            inside = (t > 0) & (t < 1)
+            for k in range(len(poly)):  # convex polygon: q on the inner side of every edge
+                edge = np.roll(poly, -1, axis=0)[k] - poly[k]
+                inside &= np.cross(edge, q - poly[k]) @ normal >= 0
+        mask &= ~inside
     return mask
 
 
@@ -302,8 +304,14 @@ def test_benchmark_scene_matches_unoccluded_reference(ctx, material, threshold):
     assert error < threshold, f"relative MSE {error:.4f} (reference noise {noise:.1e})"
 
 
-def test_lambert_plane_matches_the_analytic_method(ctx):
-    scene = bench_scene({"type": "lambert", "albedo": [0.8, 0.6, 0.4]})
+TRIANGLE = {"type": "polygon", "vertices": [[1.2, 0.8, -0.2], [0.6, 0.8, 0.9], [1.6, 0.8, 0.5]], "radiance": [2, 3, 4]}
+
+
+@pytest.mark.parametrize("lights", [[LIGHT_DOWN], [LIGHT_DOWN, TRIANGLE]], ids=["quad", "quad+triangle"])
+def test_lambert_plane_matches_the_analytic_method(ctx, lights):
+    """Exact diffuse term (identity LTC) against the analytic method; with a triangle the vertex count varies
+    between lights (the shader's general loop), with quads only it is a compile-time constant."""
+    scene = bench_scene({"type": "lambert", "albedo": [0.8, 0.6, 0.4]}, lights)
     mask = plane_mask(scene)
     ltc = reflets.render(scene, method="ltc", size=SIZE)
     exact = reflets.render(scene, method="analytic", size=SIZE)

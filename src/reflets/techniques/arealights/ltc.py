@@ -39,7 +39,10 @@ without building the clipped polygon (no local arrays, no data-dependent branche
 runs both sides of every branch), and the edge term θ/sinθ comes from a rational fit instead of acos/atan.
 The light records (the light buffer's layout, ``polygon_record``) are also uploaded as a uniform array for
 up to ``UNIFORM_LIGHTS`` polygon lights: on llvmpipe uniform loads are broadcasts while buffer loads gather
-per pixel (−6 % frame time with one light, −19 % with eight); more lights read the buffer.
+per pixel (−6 % frame time with one light, −19 % with eight); more lights read the buffer. When every polygon
+light of the scene has the same vertex count (quads), the edge loops get it as a constant and unroll (−10 %).
+Benchmark scene at 800×600 on llvmpipe (2 cores), one quad light, GGX α = 0.3: 47–50 ms per frame against
+35–37 ms for ``forward`` with one point light (1.3–1.45×); Lambert: 19–21 ms against 10.5–11 ms (1.8–1.9×).
 """
 
 from __future__ import annotations
@@ -65,12 +68,12 @@ from . import ltc_fit
 from .base import AREA_PROGRAM, POLY_STRIDE, SHADERS, AreaLightTechnique, polygon_record
 from .ltc_fit import FAMILIES, LtcTable
 
+LTC_FLAGS = {"LTC_SIZE_THETA", "LTC_SIZE_ROUGH", "LTC_EDGE_P", "LTC_EDGE_Q", "LTC_DIFFUSE", "LTC_LOBE"}
 LTC_PROGRAM = ProgramSpec(
     "arealight_ltc",
     vertex=AREA_PROGRAM.vertex,
     fragment=AREA_PROGRAM.fragment,
-    flags=AREA_PROGRAM.flags
-    | {"LTC_SIZE_THETA", "LTC_SIZE_ROUGH", "LTC_EDGE_P", "LTC_EDGE_Q", "LTC_DIFFUSE", "LTC_LOBE", "LTC_UNIFORM_LIGHTS"},
+    flags=AREA_PROGRAM.flags | LTC_FLAGS | {"LTC_UNIFORM_LIGHTS", "LTC_VERTICES"},
 )
 #: the Lambertian parameter of each material type (split off and integrated exactly)
 DIFFUSE_PARAMETER = {"phong": "kd", "blinn_phong": "kd", "ward": "kd", "lafortune": "kd", "microfacet": "diffuse"}
@@ -222,22 +225,20 @@ class Ltc(AreaLightTechnique):
     def flags(self, material) -> dict[str, object]:
         choice = self._choice(material)
         size = choice.table.size if choice.table is not None else (1, 1)
+        polygons = self._polygons()
+        counts = {len(light.polygon()) for light in polygons}
         defines = ltc_fit.glsl_defines(
             size,
             diffuse=max(choice.diffuse) > 0.0,
             lobe=choice.table is not None,
-            uniform_lights=UNIFORM_LIGHTS if len(self._uniform_records()) <= UNIFORM_LIGHTS * POLY_STRIDE else 0,
+            uniform_lights=UNIFORM_LIGHTS if len(polygons) <= UNIFORM_LIGHTS else 0,
+            vertices=counts.pop() if len(counts) == 1 else 0,
         )
         return {**super().flags(material), **defines}
 
-    def _uniform_records(self) -> list[tuple]:
-        """The polygon-light records of the scene being prepared (the light buffer's rows)."""
-        return [
-            row
-            for light in self.scene.light
-            if isinstance(light, QuadLight | PolygonLight)
-            for row in polygon_record(light)
-        ]
+    def _polygons(self) -> list:
+        """The polygon lights of the scene being prepared, in the light buffer's order."""
+        return [light for light in self.scene.light if isinstance(light, QuadLight | PolygonLight)]
 
     def material_uniforms(self, material) -> dict[str, object]:
         choice = self._choice(material)
@@ -250,10 +251,11 @@ class Ltc(AreaLightTechnique):
         }
 
     def _light_uniforms(self) -> dict[str, object]:
-        rows = self._uniform_records()
-        if not rows or len(rows) > UNIFORM_LIGHTS * POLY_STRIDE:
+        polygons = self._polygons()
+        if not polygons or len(polygons) > UNIFORM_LIGHTS:
             return {}
         data = np.zeros((UNIFORM_LIGHTS * POLY_STRIDE, 4), np.float32)
+        rows = [row for light in polygons for row in polygon_record(light)]
         data[: len(rows)] = rows
         return {"a_ltc_lights": data.tobytes()}
 

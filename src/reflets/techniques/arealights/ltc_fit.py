@@ -277,11 +277,12 @@ def fit_theta_over_sin(samples: int = 20001, rounds: int = 60) -> tuple[np.ndarr
 
 
 def glsl_defines(
-    size: tuple[int, int], diffuse: bool = True, lobe: bool = True, uniform_lights: int = 0
+    size: tuple[int, int], diffuse: bool = True, lobe: bool = True, uniform_lights: int = 0, vertices: int = 0
 ) -> dict[str, str | int]:
     """The ``#define``s ltc.glsl needs: the table's ``size`` = (n_theta, n_rough), the edge-integral
-    coefficients, whether the material has a Lambertian term and a fitted lobe, and the capacity of the
-    uniform copy of the light records (0: read the light buffer)."""
+    coefficients, whether the material has a Lambertian term and a fitted lobe, the capacity of the uniform
+    copy of the light records (0: read the light buffer) and the vertex count shared by every polygon light
+    (0: read each light's)."""
     return {
         "LTC_SIZE_THETA": int(size[0]),
         "LTC_SIZE_ROUGH": int(size[1]),
@@ -290,6 +291,7 @@ def glsl_defines(
         "LTC_DIFFUSE": int(diffuse),
         "LTC_LOBE": int(lobe),
         "LTC_UNIFORM_LIGHTS": int(uniform_lights),
+        "LTC_VERTICES": int(vertices),
     }
 
 

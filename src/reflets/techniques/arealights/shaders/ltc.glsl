@@ -7,7 +7,8 @@
 // (1 when the material has a Lambertian term / a fitted lobe: compile-time, since a software rasteriser runs
 // both sides of a branch), LTC_UNIFORM_LIGHTS (> 0: the polygon-light records, in the layout of the light
 // buffer, also come as a uniform array of that many lights, read instead of the buffer: uniform loads are
-// broadcasts, buffer loads are per-pixel gathers on llvmpipe).
+// broadcasts, buffer loads are per-pixel gathers on llvmpipe), LTC_VERTICES (> 0: every polygon light of the
+// scene has that many vertices, so the edge loops have a constant trip count and unroll).
 
 uniform sampler2D a_ltc_minv;       // (m02, m11, m20, m22) of a multiple of M⁻¹ = [[1,0,m02],[0,m11,0],[m20,0,m22]]
 uniform sampler2D a_ltc_magnitude;  // ∫ f cos dω per RGB channel (alpha unused)
@@ -64,7 +65,7 @@ void ltc_clipped_edge(vec3 a, vec3 b, inout float sum, inout vec3 exit_point, in
 // ∫ max(0, ω_z)/π dω over the spherical polygon of light i's vertices, transformed by T after subtracting x:
 // (1/2π)|Σ θ_k Γ_k·z| over the polygon clipped to z ≥ 0 (Lambert's formula). The absolute value makes either
 // winding right, which is how a two-sided light seen from behind is handled. No local arrays (the vertices
-// stream from the light buffer), no data-dependent loop: this is what keeps it fast on SIMD rasterisers.
+// stream from the light records), no data-dependent branch: this is what keeps it fast on SIMD rasterisers.
 float ltc_polygon_integral(int i, int n, mat3 T, vec3 x) {
     vec3 first = normalize(T * (ltc_vertex(i, 0) - x));
     vec3 a = first;
@@ -107,7 +108,11 @@ vec3 area_light_contribution(int i, vec3 x, mat3 frame, vec3 wo) {
     vec3 normal = ltc_light_row(i, 4).xyz;
     float side = dot(x - corner.xyz, normal);  // as area_light_faces(): on an emitting side?
     if (!(head.w > 0.5 ? side != 0.0 : side > 0.0)) return vec3(0.0);
+#if LTC_VERTICES > 0
+    const int n = LTC_VERTICES;
+#else
     int n = int(corner.w + 0.5);
+#endif
     vec3 sum = vec3(0.0);
 #if LTC_DIFFUSE
     sum += a_ltc_diffuse * ltc_polygon_integral(i, n, transpose(frame), x);
