@@ -65,8 +65,9 @@ def _check_files(scene: Scene, source) -> None:
             )
 
 
-def _field_path(loc: tuple, data: Any) -> str:
-    """``('mesh', 0, 'plane', 'size')`` → ``mesh[0].size``: walk the input, dropping union tags."""
+def _walk(loc: tuple, data: Any) -> tuple[str, Any]:
+    """Follow a pydantic location through the user's input, dropping union tags:
+    ``('mesh', 0, 'plane', 'size')`` → (``"mesh[0].size"``, the value the user wrote there, or None)."""
     parts: list[str] = []
     node = data
     skipped = False
@@ -82,22 +83,11 @@ def _field_path(loc: tuple, data: Any) -> str:
             parts.append(("." if parts else "") + str(item))
             node = node.get(item) if isinstance(node, dict) else None
             skipped = False
-    return "".join(parts) or "<scene>"
+    return "".join(parts) or "<scene>", node
 
 
-def _lookup(data: Any, loc: tuple) -> Any:
-    """The input value at a pydantic location (tags skipped), or None."""
-    node = data
-    for item in loc:
-        if isinstance(item, int) and isinstance(node, list) and item < len(node):
-            node = node[item]
-        elif isinstance(node, dict) and item in node and not (_is_tag(item, node) and item != "file"):
-            node = node[item]
-        elif isinstance(node, dict) and _is_tag(item, node):
-            continue
-        else:
-            return None
-    return node
+def _field_path(loc: tuple, data: Any) -> str:
+    return _walk(loc, data)[0]
 
 
 def _is_tag(item: Any, node: Any) -> bool:
@@ -117,8 +107,7 @@ def _first_error(exc: ValidationError, data: dict) -> str:
     if kind == "extra_forbidden":
         return f"{field}: unknown key; check the spelling against `reflets schema`"
     if kind == "missing" and loc and isinstance(loc[-1], int):
-        vector = _field_path(loc[:-1], data)
-        got = _lookup(data, loc[:-1])
+        vector, got = _walk(loc[:-1], data)
         count = len(got) if isinstance(got, list) else "?"
         return f"{vector}: wrong length: got {count} values, needs at least {loc[-1] + 1}"
     if kind == "missing":

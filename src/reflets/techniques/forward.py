@@ -311,7 +311,6 @@ class Forward(Technique):
         self._env_texture.use(0)
         uniforms = {
             "u_inv_view_proj": np.linalg.inv(view_proj).T.astype(np.float32).tobytes(),
-            "u_use_env": True,
             "u_env_from_world": rot.astype(np.float32).tobytes(),  # R^T: column-major bytes of row-major R
             "u_env": 0,
         }

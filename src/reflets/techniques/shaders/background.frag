@@ -1,13 +1,10 @@
-// Provides the background: a constant colour, or the environment map seen along each camera ray.
+// Provides the environment background: the map seen along each camera ray (constant colours are a clear).
 in vec2 v_ndc;
 uniform mat4 u_inv_view_proj;
-uniform vec3 u_color;
-uniform bool u_use_env;
 uniform mat3 u_env_from_world;  // inverse of the environment's rotation
 uniform sampler2D u_env;
 out vec4 f_color;
 void main() {
-    if (!u_use_env) { f_color = vec4(u_color, 1.0); return; }
     vec4 a = u_inv_view_proj * vec4(v_ndc, -1.0, 1.0);
     vec4 b = u_inv_view_proj * vec4(v_ndc, 1.0, 1.0);
     vec3 d = normalize(b.xyz / b.w - a.xyz / a.w);
