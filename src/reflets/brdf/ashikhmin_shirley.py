@@ -8,17 +8,11 @@ import numpy as np
 from pydantic import Field
 
 from .base import (
+    HalfVectorLobeMixture,
     Material,
     Reflectance,
-    finish_sample,
     luminance,
-    mix_pdf,
-    pdf_cosine,
-    reflect_or_fail,
     register_material,
-    sample_cosine,
-    sample_half_vector_pdf_to_wi,
-    sample_mixture,
     upper,
 )
 
@@ -47,7 +41,7 @@ def grazing_falloff(cos: np.ndarray) -> np.ndarray:
 
 
 @register_material
-class AshikhminShirley(Material):
+class AshikhminShirley(HalfVectorLobeMixture, Material):
     """Ashikhmin & Shirley 2000, "An anisotropic Phong BRDF model": Fresnel-weighted anisotropic Phong
     lobe (exponent n_u along the tangent, local x; n_v along y) plus a coupled, non-Lambertian diffuse term.
 
@@ -134,24 +128,6 @@ class AshikhminShirley(Material):
         ok = u[..., 2] > 0
         safe = np.where(ok[..., None], u, [0.0, 0.0, 1.0])
         return np.where(ok, self.norm / (2.0 * np.pi) * np.exp(log_lobe(safe, self.nu, self.nv)), 0.0)
-
-    def sample(self, wo: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Mixture of cosine sampling (diffuse) and Ashikhmin–Shirley half-vector sampling (specular)."""
-        wo = np.broadcast_to(np.asarray(wo, dtype=np.float64), np.shape(u1) + (3,))
-
-        def lobe(a, b, chosen):
-            return reflect_or_fail(wo[chosen], self.sample_half_vector(a, b))
-
-        wi = sample_mixture(self._weights(), [lambda a, b, _: sample_cosine(a, b), lobe], u1, u2)
-        return finish_sample(self, wo, wi)
-
-    def pdf(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
-        wo = np.asarray(wo, dtype=np.float64)
-        wi = np.asarray(wi, dtype=np.float64)
-        u = wo + wi
-        h = u / np.maximum(np.linalg.norm(u, axis=-1, keepdims=True), 1e-300)
-        lobe = sample_half_vector_pdf_to_wi(self.pdf_half_vector(u), wo, h)
-        return mix_pdf(self._weights(), [pdf_cosine(wi), lobe])
 
     def uniforms(self) -> dict[str, object]:
         return {

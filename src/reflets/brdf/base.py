@@ -194,3 +194,25 @@ def luminance(rgb) -> float:
     """Rec. 709 luminance of an RGB triple (used to weight sampling strategies)."""
     r, g, b = rgb
     return 0.2126 * r + 0.7152 * g + 0.0722 * b
+
+
+class HalfVectorLobeMixture:
+    """Sampling shared by diffuse + half-vector-lobe models (Blinn-Phong, Ward, Ashikhmin–Shirley): a one-sample
+    mixture, weighted by ``_weights()`` = [diffuse, specular], of cosine-weighted directions and half vectors
+    drawn by ``sample_half_vector(u1, u2)`` with density ``pdf_half_vector(h)``, reflected about wo."""
+
+    def sample(self, wo: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        wo = np.broadcast_to(np.asarray(wo, dtype=np.float64), np.shape(u1) + (3,))
+
+        def lobe(a, b, chosen):
+            return reflect_or_fail(wo[chosen], self.sample_half_vector(a, b))
+
+        wi = sample_mixture(self._weights(), [lambda a, b, _: sample_cosine(a, b), lobe], u1, u2)
+        return finish_sample(self, wo, wi)
+
+    def pdf(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        wo = np.asarray(wo, dtype=np.float64)
+        wi = np.asarray(wi, dtype=np.float64)
+        h = normalize(wo + wi)
+        lobe = sample_half_vector_pdf_to_wi(self.pdf_half_vector(h), wo, h)
+        return mix_pdf(self._weights(), [pdf_cosine(wi), lobe])

@@ -8,19 +8,12 @@ import numpy as np
 from pydantic import Field
 
 from .base import (
+    HalfVectorLobeMixture,
     Material,
     Reflectance,
-    finish_sample,
     luminance,
-    mix_pdf,
-    normalize,
-    pdf_cosine,
     pdf_power_cosine,
-    reflect_or_fail,
     register_material,
-    sample_cosine,
-    sample_half_vector_pdf_to_wi,
-    sample_mixture,
     sample_power_cosine,
     upper,
 )
@@ -34,7 +27,7 @@ def normalization(e: float) -> float:
 
 
 @register_material
-class BlinnPhong(Material):
+class BlinnPhong(HalfVectorLobeMixture, Material):
     """Diffuse + Blinn–Phong specular lobe around the half vector h = normalize(wo + wi).
 
     Parameters
@@ -86,20 +79,12 @@ class BlinnPhong(Material):
         d, s = luminance(self.kd), luminance(self.ks)
         return [d, s] if d + s > 0 else [1.0, 0.0]
 
-    def sample(self, wo: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Mixture of cosine sampling (diffuse) and half vectors with density (e + 1)/(2π) cos^e θ_h."""
-        wo = np.broadcast_to(np.asarray(wo, dtype=np.float64), np.shape(u1) + (3,))
+    def sample_half_vector(self, u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
+        """Half vectors with density (e + 1)/(2π) cos^e θ_h around the normal."""
+        return sample_power_cosine(_Z, self.exponent, u1, u2)
 
-        def lobe(a, b, chosen):
-            return reflect_or_fail(wo[chosen], sample_power_cosine(_Z, self.exponent, a, b))
-
-        wi = sample_mixture(self._weights(), [lambda a, b, _: sample_cosine(a, b), lobe], u1, u2)
-        return finish_sample(self, wo, wi)
-
-    def pdf(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
-        h = normalize(np.asarray(wo, dtype=np.float64) + wi)
-        lobe = sample_half_vector_pdf_to_wi(pdf_power_cosine(_Z, self.exponent, h), wo, h)
-        return mix_pdf(self._weights(), [pdf_cosine(wi), lobe])
+    def pdf_half_vector(self, h: np.ndarray) -> np.ndarray:
+        return pdf_power_cosine(_Z, self.exponent, h)
 
     def uniforms(self) -> dict[str, object]:
         return {

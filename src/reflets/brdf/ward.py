@@ -8,17 +8,11 @@ import numpy as np
 from pydantic import Field
 
 from .base import (
+    HalfVectorLobeMixture,
     Material,
     Reflectance,
-    finish_sample,
     luminance,
-    mix_pdf,
-    pdf_cosine,
-    reflect_or_fail,
     register_material,
-    sample_cosine,
-    sample_half_vector_pdf_to_wi,
-    sample_mixture,
     upper,
 )
 
@@ -32,7 +26,7 @@ def slope_exponent(u: np.ndarray, ax: float, ay: float) -> np.ndarray:
 
 
 @register_material
-class Ward(Material):
+class Ward(HalfVectorLobeMixture, Material):
     """Diffuse + anisotropic Ward specular lobe; roughness α_x along the tangent (local x), α_y along y.
 
     Parameters
@@ -113,24 +107,6 @@ class Ward(Material):
         ok = hz > 1e-12
         value = np.exp(-slope_exponent(h, ax, ay)) / (np.pi * ax * ay * np.where(ok, hz, 1.0) ** 3)
         return np.where(ok, value, 0.0)
-
-    def sample(self, wo: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Mixture of cosine sampling (diffuse) and Ward half-vector sampling (specular)."""
-        wo = np.broadcast_to(np.asarray(wo, dtype=np.float64), np.shape(u1) + (3,))
-
-        def lobe(a, b, chosen):
-            return reflect_or_fail(wo[chosen], self.sample_half_vector(a, b))
-
-        wi = sample_mixture(self._weights(), [lambda a, b, _: sample_cosine(a, b), lobe], u1, u2)
-        return finish_sample(self, wo, wi)
-
-    def pdf(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
-        wo = np.asarray(wo, dtype=np.float64)
-        wi = np.asarray(wi, dtype=np.float64)
-        u = wo + wi
-        h = u / np.maximum(np.linalg.norm(u, axis=-1, keepdims=True), 1e-300)
-        lobe = sample_half_vector_pdf_to_wi(self.pdf_half_vector(h), wo, h)
-        return mix_pdf(self._weights(), [pdf_cosine(wi), lobe])
 
     def uniforms(self) -> dict[str, object]:
         ax, ay = self.alpha_xy
