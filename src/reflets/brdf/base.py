@@ -69,7 +69,9 @@ class Material(BaseModel):
         raise NotImplementedError
 
     def flags(self) -> dict[str, object]:
-        """Compile-time shader flags (``#define``s) this material needs; none by default."""
+        """Compile-time shader flags (``#define``s) this material needs; none by default. Their names start
+        with ``BRDF_`` (every program with a BRDF slot accepts them): model switches belong here rather than in
+        uniforms, since a software rasteriser executes every side of a branch."""
         return {}
 
     def textures(self, ctx) -> dict[str, object]:

@@ -355,15 +355,19 @@ class Microfacet(Material):
 
     # ------------------------------------------------------------------------------------------ GPU
 
-    def uniforms(self) -> dict[str, object]:
+    def flags(self) -> dict[str, object]:
         modes = ("none", "schlick", "dielectric", "conductor")
         return {
+            "BRDF_MF_DISTRIBUTION": 0 if self.distribution == "ggx" else 1,
+            "BRDF_MF_FRESNEL": modes.index(self.fresnel),
+            "BRDF_MF_CORRELATED": int(self.masking == "correlated"),
+        }
+
+    def uniforms(self) -> dict[str, object]:
+        return {
             "m_alpha": self.alpha_xy,
-            "m_distribution": 0 if self.distribution == "ggx" else 1,
-            "m_fresnel": modes.index(self.fresnel),
             "m_specular": tuple(float(s) for s in self.specular),
             "m_eta": self.eta_rgb,
             "m_k": self.k_rgb,
-            "m_correlated": self.masking == "correlated",
             "m_diffuse": tuple(float(d) for d in self.diffuse),
         }

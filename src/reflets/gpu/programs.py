@@ -123,8 +123,12 @@ _CACHE: dict[tuple, object] = {}
 
 
 def get_program(ctx, spec: ProgramSpec, *, slots: dict[str, str] | None = None, **flags):
-    """Compile (or fetch from the cache) ``spec`` with include ``slots`` and ``flags`` as ``#define``s."""
-    unknown = sorted(set(flags) - spec.flags)
+    """Compile (or fetch from the cache) ``spec`` with include ``slots`` and ``flags`` as ``#define``s.
+
+    Flags must be declared by the spec, except a material's own (``BRDF_*``) where the program has a BRDF slot.
+    """
+    material_flags = {k for k in flags if k.startswith("BRDF_")} if "BRDF" in (slots or {}) else set()
+    unknown = sorted(set(flags) - spec.flags - material_flags)
     if unknown:
         raise ShaderError(
             f"program {spec.name}: undeclared flag(s) {', '.join(unknown)}; declared: "
@@ -164,10 +168,19 @@ def get_program(ctx, spec: ProgramSpec, *, slots: dict[str, str] | None = None, 
 
 def set_uniforms(program, values: dict) -> None:
     """Set uniforms the compiler kept; unused ones are optimised away by the driver and skipped.
-    ``bytes`` values are written raw (matrices: column-major float32)."""
+    ``bytes`` values are written raw (matrices: column-major float32); for an array, only the elements the
+    driver kept active (a prefix: trailing elements a shader never indexes may be trimmed)."""
     for key, value in values.items():
         if key in program:
             if isinstance(value, bytes):
-                program[key].write(value)
+                uniform = program[key]
+                if uniform.array_length > 1:
+                    value = value[: len(value) // _array_length(value, uniform) * uniform.array_length]
+                uniform.write(value)
             else:
                 program[key].value = value
+
+
+def _array_length(value: bytes, uniform) -> int:
+    """How many elements of ``uniform``'s type the bytes hold (float32 / int32 components)."""
+    return max(len(value) // (4 * uniform.dimension), 1)

@@ -33,8 +33,10 @@ from ..scene.transform import look_at, perspective
 from .base import Technique, TechniqueParams, register_technique
 
 _SHADERS = "reflets/techniques/shaders/"
+#: compile-time light counts of lights.glsl (every program that includes it declares them)
+LIGHT_FLAGS = frozenset({"N_POINT", "N_DIR", "N_AREA", "N_ENV"})
 MESH_PROGRAM = ProgramSpec(
-    "forward", vertex=_SHADERS + "mesh.vert", fragment=_SHADERS + "forward.frag", flags=frozenset({"OUTPUT"})
+    "forward", vertex=_SHADERS + "mesh.vert", fragment=_SHADERS + "forward.frag", flags=frozenset({"OUTPUT"}) | LIGHT_FLAGS
 )
 EMITTER_PROGRAM = ProgramSpec("emitter", vertex=_SHADERS + "emitter.vert", fragment=_SHADERS + "emitter.frag")
 BACKGROUND_PROGRAM = ProgramSpec(
@@ -109,25 +111,7 @@ class Forward(Technique):
         self.release()
         self.scene = scene
         self._objects = []
-        points = []
-        self._draws = []
-        for index, mesh in enumerate(scene.mesh):
-            data = mesh_data(scene, index)
-            points.append(data.positions)
-            material = scene.materials[mesh.material]
-            program = get_program(ctx, self.program_spec, slots=self.slots(material), **self.flags(material))
-            vbo = ctx.buffer(data.interleaved().tobytes())
-            ibo = ctx.buffer(data.indices.tobytes())
-            vao = ctx.vertex_array(
-                program,
-                [(vbo, "3f 3f 4f 2f", "in_position", "in_normal", "in_tangent", "in_uv")],
-                ibo,
-                skip_errors=True,
-            )
-            self._objects += [vbo, ibo, vao]
-            uniforms = {**material.uniforms(), **self.material_uniforms(material)}
-            textures = {**material.textures(ctx), **self.material_textures(material)}
-            self._draws.append((program, vao, uniforms, textures))
+        points = []  # every mesh vertex and light corner: the clip planes must hold them all
 
         points_l, dirs, area, emitters = [], [], [], []
         for light in scene.light:
@@ -148,13 +132,37 @@ class Forward(Technique):
             keep = np.any(env_power > 0, axis=1)
             for d, pw in zip(env_dirs[keep], env_power[keep], strict=True):
                 env += [(*d, 0.0), (*pw, 0.0)]
-        self._light_counts = {
-            "u_n_point": len(points_l) // 2,
-            "u_n_dir": len(dirs) // 2,
-            "u_n_area": len(area) // 3,
-            "u_n_env": len(env) // 2,
+        polygons = self.polygon_rows(scene)
+        # Light counts are compile-time constants: llvmpipe executes a loop's body (masked) even for zero
+        # iterations, so a loop over an absent light type cost as much as one light (measured: 3 empty loops
+        # with a GGX BRDF doubled the frame time of one point light).
+        self._light_flags = {
+            "N_POINT": len(points_l) // 2,
+            "N_DIR": len(dirs) // 2,
+            "N_AREA": len(area) // 3,
+            "N_ENV": len(env) // 2,
+            **self.extra_light_flags(polygons),
         }
-        self._light_buffers = [self._ssbo(rows) for rows in (points_l, dirs, area, env, self.polygon_rows(scene))]
+        self._light_buffers = [self._ssbo(rows) for rows in (points_l, dirs, area, env, polygons)]
+
+        self._draws = []
+        for index, mesh in enumerate(scene.mesh):
+            data = mesh_data(scene, index)
+            points.append(data.positions)
+            material = scene.materials[mesh.material]
+            program = get_program(ctx, self.program_spec, slots=self.slots(material), **self.flags(material))
+            vbo = ctx.buffer(data.interleaved().tobytes())
+            ibo = ctx.buffer(data.indices.tobytes())
+            vao = ctx.vertex_array(
+                program,
+                [(vbo, "3f 3f 4f 2f", "in_position", "in_normal", "in_tangent", "in_uv")],
+                ibo,
+                skip_errors=True,
+            )
+            self._objects += [vbo, ibo, vao]
+            uniforms = {**material.uniforms(), **self.material_uniforms(material)}
+            textures = {**material.textures(ctx), **self.material_textures(material)}
+            self._draws.append((program, vao, uniforms, textures))
 
         self._emitters = []
         emitter_program = get_program(ctx, EMITTER_PROGRAM)
@@ -188,7 +196,7 @@ class Forward(Technique):
         return {"BRDF": material.glsl}
 
     def flags(self, material) -> dict[str, object]:
-        return {"OUTPUT": _OUTPUTS[self.params.output], **material.flags()}
+        return {"OUTPUT": _OUTPUTS[self.params.output], **self._light_flags, **material.flags()}
 
     def material_uniforms(self, material) -> dict[str, object]:
         """Per-draw uniforms a technique adds for a material (besides the material's own)."""
@@ -212,6 +220,10 @@ class Forward(Technique):
     def polygon_rows(self, scene: Scene) -> list[tuple]:
         """Rows of the polygon-light buffer (binding 4), used by the area-light techniques; none here."""
         return []
+
+    def extra_light_flags(self, polygon_rows: list[tuple]) -> dict[str, int]:
+        """Compile-time light counts a technique adds (the area-light methods: N_POLYGONS)."""
+        return {}
 
     def frame_uniforms(self, frame: int, seed: int) -> dict[str, object]:
         """Uniforms that change per frame (progressive techniques: frame index and seed)."""
@@ -280,7 +292,6 @@ class Forward(Technique):
                 {
                     "u_view_proj": vp_bytes,
                     "u_eye": eye,
-                    **self._light_counts,
                     **uniforms,
                     **self.frame_uniforms(frame, seed),
                 },

@@ -22,7 +22,7 @@ from pydantic import Field
 from ...errors import ArgumentError
 from ...gpu import ProgramSpec
 from ...scene.model import PolygonLight, QuadLight, Scene
-from ..forward import Forward, ForwardParams, polygon_normal
+from ..forward import LIGHT_FLAGS, Forward, ForwardParams, polygon_normal
 
 SHADERS = "reflets/techniques/arealights/shaders/"
 POLY_STRIDE = 16
@@ -32,7 +32,7 @@ AREA_PROGRAM = ProgramSpec(
     "arealight",
     vertex="reflets/techniques/shaders/mesh.vert",
     fragment=SHADERS + "arealight.frag",
-    flags=frozenset({"OUTPUT", "METHOD_VARIANT"}),
+    flags=frozenset({"OUTPUT", "METHOD_VARIANT", "N_POLYGONS"}) | LIGHT_FLAGS,
 )
 
 
@@ -106,7 +106,12 @@ class AreaLightTechnique(Forward):
 
     def flags(self, material) -> dict[str, object]:
         outputs = {"radiance": 0, "position": 1, "normal": 2, "uv": 3, "samples": 4}
-        return {"OUTPUT": outputs[self.params.output], **material.flags(), **self.method_flags()}
+        return {
+            "OUTPUT": outputs[self.params.output],
+            **self._light_flags,
+            **material.flags(),
+            **self.method_flags(),
+        }
 
     def method_flags(self) -> dict[str, object]:
         """Compile-time variants of the method (e.g. METHOD_VARIANT)."""
@@ -127,9 +132,7 @@ class AreaLightTechnique(Forward):
         for light in scene.light:
             if isinstance(light, QuadLight | PolygonLight):
                 rows += polygon_record(light)
-        self._light_counts_extra = {"u_n_polygons": len(rows) // POLY_STRIDE}
         return rows
 
-    def prepare(self, scene: Scene) -> None:
-        super().prepare(scene)
-        self._light_counts.update(self._light_counts_extra)
+    def extra_light_flags(self, polygon_rows: list[tuple]) -> dict[str, int]:
+        return {"N_POLYGONS": len(polygon_rows) // POLY_STRIDE}

@@ -231,7 +231,7 @@ class Ltc(AreaLightTechnique):
             size,
             diffuse=max(choice.diffuse) > 0.0,
             lobe=choice.table is not None,
-            uniform_lights=UNIFORM_LIGHTS if len(polygons) <= UNIFORM_LIGHTS else 0,
+            uniform_lights=len(polygons) if len(polygons) <= UNIFORM_LIGHTS else 0,
             vertices=counts.pop() if len(counts) == 1 else 0,
         )
         return {**super().flags(material), **defines}
@@ -254,10 +254,8 @@ class Ltc(AreaLightTechnique):
         polygons = self._polygons()
         if not polygons or len(polygons) > UNIFORM_LIGHTS:
             return {}
-        data = np.zeros((UNIFORM_LIGHTS * POLY_STRIDE, 4), np.float32)
         rows = [row for light in polygons for row in polygon_record(light)]
-        data[: len(rows)] = rows
-        return {"a_ltc_lights": data.tobytes()}
+        return {"a_ltc_lights": np.asarray(rows, np.float32).tobytes()}
 
     def material_textures(self, material) -> dict[str, object]:
         table = self._choice(material).table

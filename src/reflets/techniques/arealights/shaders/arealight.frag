@@ -21,7 +21,9 @@ void main() {
     mat3 frame = shading_frame(n, v_tangent);
     vec3 wo = transpose(frame) * normalize(u_eye - v_position);
     vec3 sum = direct_lighting(v_position, frame, wo);
-    for (int i = 0; i < u_n_polygons; ++i) sum += area_light_contribution(i, v_position, frame, wo);
+#if N_POLYGONS > 0
+    for (int i = 0; i < N_POLYGONS; ++i) sum += area_light_contribution(i, v_position, frame, wo);
+#endif
 #if OUTPUT == 4
     f_color = vec4(vec3(float(g_samples)), 1.0);
 #else

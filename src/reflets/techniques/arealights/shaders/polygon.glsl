@@ -1,7 +1,6 @@
 // Provides polygon area lights (std430 binding 4, layout in techniques/arealights/base.py), horizon clipping
 // and the exact Lambert edge integral shared by the area-light methods; g_samples counts light samples.
 layout(std430, binding = 4) readonly buffer PolygonLights { vec4 poly_data[]; };
-uniform int u_n_polygons;
 
 const int POLY_STRIDE = 16;
 const int MAX_POLY_VERTICES = 8;
