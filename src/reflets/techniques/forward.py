@@ -36,7 +36,10 @@ _SHADERS = "reflets/techniques/shaders/"
 #: compile-time light counts of lights.glsl (every program that includes it declares them)
 LIGHT_FLAGS = frozenset({"N_POINT", "N_DIR", "N_AREA", "N_ENV"})
 MESH_PROGRAM = ProgramSpec(
-    "forward", vertex=_SHADERS + "mesh.vert", fragment=_SHADERS + "forward.frag", flags=frozenset({"OUTPUT"}) | LIGHT_FLAGS
+    "forward",
+    vertex=_SHADERS + "mesh.vert",
+    fragment=_SHADERS + "forward.frag",
+    flags=frozenset({"OUTPUT"}) | LIGHT_FLAGS,
 )
 EMITTER_PROGRAM = ProgramSpec("emitter", vertex=_SHADERS + "emitter.vert", fragment=_SHADERS + "emitter.frag")
 BACKGROUND_PROGRAM = ProgramSpec(

@@ -65,7 +65,7 @@ from ...gpu import ProgramSpec
 from ...scene.model import PolygonLight, QuadLight
 from ..base import register_technique
 from . import ltc_fit
-from .base import AREA_PROGRAM, POLY_STRIDE, SHADERS, AreaLightTechnique, polygon_record
+from .base import AREA_PROGRAM, SHADERS, AreaLightTechnique, polygon_record
 from .ltc_fit import FAMILIES, LtcTable
 
 LTC_FLAGS = {"LTC_SIZE_THETA", "LTC_SIZE_ROUGH", "LTC_EDGE_P", "LTC_EDGE_Q", "LTC_DIFFUSE", "LTC_LOBE"}
