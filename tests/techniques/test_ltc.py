@@ -408,3 +408,27 @@ def test_fit_ltc_command_writes_a_table_with_its_command(tmp_path, capsys):
     expected = "reflets fit-ltc --brdf lambert --param albedo=[0.5, 0.5, 0.5] --size 4 -o lambert.npz"
     assert table.meta["command"] == expected
     assert main(["fit-ltc", "--brdf", "glass", "-o", str(out)]) == 2
+
+
+def test_profile_variants_drop_a_stage_and_full_is_the_default(ctx):
+    """The cost-breakdown switch: "full" is the method itself; every other stage changes the image (a variant
+    whose #if silently matched nothing would time the full shader under a wrong name)."""
+    crossing = {  # a light through the plane: half of it lies below every point's horizon
+        "type": "quad",
+        "corners": [[-0.5, -0.3, 0], [0.5, -0.3, 0], [-0.5, 0.7, 0]],
+        "radiance": [5, 5, 5],
+        "two_sided": True,
+    }
+    material = {"type": "microfacet", "distribution": "ggx", "alpha": 0.3, "diffuse": [0.2, 0.2, 0.2]}
+    scene = bench_scene(material, lights=[crossing])
+    images = {}
+    for profile in ltc_module.PROFILE_STAGES:
+        technique = ltc_module.Ltc(ctx, profile=profile)
+        technique.prepare(scene)
+        images[profile] = technique.render(size=(80, 60))
+        technique.release()
+    default = reflets.render(scene, method="ltc", size=(80, 60))
+    np.testing.assert_array_equal(images["full"], default)
+    assert default.max() > 0.1
+    for profile in ltc_module.PROFILE_STAGES[1:]:
+        assert np.abs(images[profile] - default).max() > 1e-3, profile

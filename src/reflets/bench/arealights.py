@@ -134,6 +134,7 @@ def bench_arealights(quick: bool, out_dir: Path) -> tuple[dict, str]:
                 }
             )
     plot(rows, out_dir / "arealights.png")
+    cost = ltc_cost(ctx, time_size, rounds=3 if quick else 8)
     return {
         "time_size": list(time_size),
         "error_size": list(error_size),
@@ -141,7 +142,74 @@ def bench_arealights(quick: bool, out_dir: Path) -> tuple[dict, str]:
         "reference_spp": ref_spp,
         "point_light_ms": point_ms,
         "rows": rows,
-    }, _markdown(rows, time_size, error_size, frames, ref_spp, point_ms)
+        "ltc_cost": cost,
+    }, _markdown(rows, time_size, error_size, frames, ref_spp, point_ms) + _cost_markdown(cost, time_size)
+
+
+#: the LTC cost comparison: (label, method, parameters, light); GGX α = 0.3 as in the three.js reference
+COST_CASES = [
+    ("forward, no light", "forward", {}, None),
+    ("forward, one point light", "forward", {}, "point"),
+    ("ltc", "ltc", {}, "quad"),
+    ("ltc without horizon clipping", "ltc", {"profile": "no_clip"}, "quad"),
+    ("ltc without table fetches", "ltc", {"profile": "no_fetch"}, "quad"),
+    ("ltc setup only (no polygon integral)", "ltc", {"profile": "no_edges"}, "quad"),
+]
+
+
+def ltc_cost(ctx, size, rounds: int, frames: int = 5) -> dict:
+    """Median frame times of ``ltc``, its stages and the point-light pass, measured in interleaved rounds
+    (a shared machine's load drifts; interleaving gives every case the same drift)."""
+    import reflets
+
+    from ..techniques import get_technique
+
+    lights = {
+        None: [],
+        "point": [{"type": "point", "position": [0, 1, 0], "intensity": [5, 5, 5]}],
+        "quad": [LIGHT],
+    }
+    techniques = {}
+    for label, method, params, light in COST_CASES:
+        scene = reflets.load_dict({**scene_dict(MATERIALS["ggx a=0.3"], size), "light": lights[light]})
+        technique = get_technique(method)(ctx, **params)
+        technique.prepare(scene)
+        technique.render(size=size)  # compile and warm up
+        techniques[label] = technique
+    times = {label: [] for label in techniques}
+    for _ in range(rounds):
+        for label, technique in techniques.items():
+            times[label].append(_time_image(technique, size, 1, frames))
+    for technique in techniques.values():
+        technique.release()
+    medians = {label: statistics.median(t) for label, t in times.items()}
+    return {
+        "size": list(size),
+        "rounds": rounds,
+        "frames_per_round": frames,
+        "median_ms": medians,
+        "ltc_over_point_light": medians["ltc"] / medians["forward, one point light"],
+    }
+
+
+def _cost_markdown(cost: dict, size) -> str:
+    m = cost["median_ms"]
+    full = m["ltc"]
+    lines = [
+        "## Where the time of `ltc` goes",
+        "",
+        f"GGX α = 0.3, {size[0]}×{size[1]}, median over {cost['rounds']} interleaved rounds of "
+        f"{cost['frames_per_round']} frames. `ltc` / one point light = **{cost['ltc_over_point_light']:.2f}×**. "
+        "The stage variants are timing aids only (their images are wrong); a stage's cost is the full frame "
+        "minus the variant without it.",
+        "",
+        "| case | ms / frame | cost of the dropped stage (ms) |",
+        "|---|---|---|",
+    ]
+    for label, ms in m.items():
+        dropped = f"{full - ms:.2f}" if label.startswith("ltc ") else ""
+        lines.append(f"| {label} | {ms:.2f} | {dropped} |")
+    return "\n".join(lines + [""])
 
 
 def _plane_mask(scene) -> np.ndarray:

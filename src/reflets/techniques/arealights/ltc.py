@@ -55,17 +55,18 @@ import zipfile
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import ClassVar
+from typing import ClassVar, Literal
 
 import moderngl
 import numpy as np
+from pydantic import Field
 
 from ...errors import RefletsError
 from ...gpu import ProgramSpec
 from ...scene.model import PolygonLight, QuadLight
 from ..base import register_technique
 from . import ltc_fit
-from .base import AREA_PROGRAM, SHADERS, AreaLightTechnique, polygon_record
+from .base import AREA_PROGRAM, SHADERS, AreaLightParams, AreaLightTechnique, polygon_record
 from .ltc_fit import FAMILIES, LtcTable
 
 LTC_FLAGS = {"LTC_SIZE_THETA", "LTC_SIZE_ROUGH", "LTC_EDGE_P", "LTC_EDGE_Q", "LTC_DIFFUSE", "LTC_LOBE"}
@@ -73,7 +74,7 @@ LTC_PROGRAM = ProgramSpec(
     "arealight_ltc",
     vertex=AREA_PROGRAM.vertex,
     fragment=AREA_PROGRAM.fragment,
-    flags=AREA_PROGRAM.flags | LTC_FLAGS | {"LTC_UNIFORM_LIGHTS", "LTC_VERTICES"},
+    flags=AREA_PROGRAM.flags | LTC_FLAGS | {"LTC_UNIFORM_LIGHTS", "LTC_VERTICES", "LTC_PROFILE"},
 )
 #: the Lambertian parameter of each material type (split off and integrated exactly)
 DIFFUSE_PARAMETER = {"phong": "kd", "blinn_phong": "kd", "ward": "kd", "lafortune": "kd", "microfacet": "diffuse"}
@@ -206,6 +207,20 @@ def fitted_table(material, n_theta: int = INSTANCE_SIZE) -> LtcTable:
 # ------------------------------------------------------------------------------ the technique
 
 
+#: LTC_PROFILE values of ltc.glsl, in order
+PROFILE_STAGES = ("full", "no_clip", "no_fetch", "no_edges", "frame_only")
+
+
+class LtcParams(AreaLightParams):
+    """Parameters of ``ltc``."""
+
+    profile: Literal[PROFILE_STAGES] = Field(
+        "full",
+        description="cost breakdown only (wrong images): drop a stage of the shader to time it — no_clip "
+        "(no horizon clipping), no_fetch (no table fetches), no_edges (no polygon integral), frame_only",
+    )
+
+
 @register_technique
 class Ltc(AreaLightTechnique):
     """Polygon lights by Linearly Transformed Cosines, fitted tables per BRDF (see the module docstring)."""
@@ -214,6 +229,8 @@ class Ltc(AreaLightTechnique):
     summary: ClassVar[str] = "area lights: linearly transformed cosines (fitted tables for every BRDF)"
     area_glsl: ClassVar[str] = SHADERS + "ltc.glsl"
     program_spec: ClassVar[ProgramSpec] = LTC_PROGRAM
+
+    Params: ClassVar = LtcParams
 
     def _choice(self, material) -> LtcChoice:
         cache = self.__dict__.setdefault("_choices", {})
@@ -234,7 +251,8 @@ class Ltc(AreaLightTechnique):
             uniform_lights=len(polygons) if len(polygons) <= UNIFORM_LIGHTS else 0,
             vertices=counts.pop() if len(counts) == 1 else 0,
         )
-        return {**super().flags(material), **defines}
+        profile = PROFILE_STAGES.index(self.params.profile)
+        return {**super().flags(material), **defines, "LTC_PROFILE": profile}
 
     def _polygons(self) -> list:
         """The polygon lights of the scene being prepared, in the light buffer's order."""

@@ -10,6 +10,13 @@
 // broadcasts, buffer loads are per-pixel gathers on llvmpipe), LTC_VERTICES (> 0: every polygon light of the
 // scene has that many vertices, so the edge loops have a constant trip count and unroll).
 
+// LTC_PROFILE (cost breakdown only; the images are wrong): 0 everything; otherwise drop one stage to time it.
+// (macros, not constants: an undefined name in #if silently reads 0)
+#define LTC_PROFILE_NO_CLIP 1     // edges without horizon clipping
+#define LTC_PROFILE_NO_FETCH 2    // constant matrix and magnitude instead of the two table fetches
+#define LTC_PROFILE_NO_EDGES 3    // per-fragment setup (fetches, frame rotation) but no polygon integral
+#define LTC_PROFILE_FRAME_ONLY 4  // nothing beyond the forward pass's shading frame
+
 uniform sampler2D a_ltc_minv;       // (m02, m11, m20, m22) of a multiple of M⁻¹ = [[1,0,m02],[0,m11,0],[m20,0,m22]]
 uniform sampler2D a_ltc_magnitude;  // ∫ f cos dω per RGB channel (alpha unused)
 uniform float a_ltc_roughness;      // the material's roughness coordinate r ∈ [0, 1] (0 for one-material tables)
@@ -53,6 +60,10 @@ float ltc_edge(vec3 a, vec3 b) {
 // clipped polygon closes with one horizon edge from the exit to the entry point (ltc_polygon_integral).
 // The crossing direction is a.z b − b.z a (z = 0), turned to point between a and b: no division.
 void ltc_clipped_edge(vec3 a, vec3 b, inout float sum, inout vec3 exit_point, inout vec3 entry_point) {
+#if LTC_PROFILE == LTC_PROFILE_NO_CLIP
+    sum += ltc_edge(a, b);
+    return;
+#endif
     bool above_a = a.z >= 0.0, above_b = b.z >= 0.0;
     vec2 q = (a.z * b.xy - b.z * a.xy) * (above_a ? 1.0 : -1.0);
     vec3 p = vec3(q * inversesqrt(max(dot(q, q), 1e-30)), 0.0);
@@ -89,8 +100,13 @@ vec3 g_ltc_lobe;
 
 void ltc_setup(mat3 frame, vec3 wo) {
     vec2 uv = ltc_lookup(wo.z, a_ltc_roughness);
+#if LTC_PROFILE == LTC_PROFILE_NO_FETCH
+    vec4 m = vec4(0.0, 1.0, 0.0, 1.0) + uv.xyxy * 1e-3;  // keeps the lookup's arithmetic alive
+    g_ltc_lobe = a_ltc_scale;
+#else
     vec4 m = texture(a_ltc_minv, uv);
     g_ltc_lobe = texture(a_ltc_magnitude, uv).rgb * a_ltc_scale;
+#endif
     float len2 = dot(wo.xy, wo.xy);
     vec2 c = len2 > 1e-14 ? wo.xy * inversesqrt(len2) : vec2(1.0, 0.0);
     // rows of (rotation about the normal bringing wo into the xz plane) · transpose(frame), in world space
@@ -103,6 +119,9 @@ void ltc_setup(mat3 frame, vec3 wo) {
 }
 
 vec3 area_light_contribution(int i, vec3 x, mat3 frame, vec3 wo) {
+#if LTC_PROFILE == LTC_PROFILE_FRAME_ONLY
+    return vec3(0.0);
+#endif
     vec4 head = ltc_light_row(i, 0);     // radiance, two-sided
     vec4 corner = ltc_light_row(i, 1);   // c1, vertex count
     vec3 normal = ltc_light_row(i, 4).xyz;
@@ -119,7 +138,11 @@ vec3 area_light_contribution(int i, vec3 x, mat3 frame, vec3 wo) {
 #endif
 #if LTC_LOBE
     if (!g_ltc_ready) ltc_setup(frame, wo);
+#if LTC_PROFILE == LTC_PROFILE_NO_EDGES
+    sum += g_ltc_lobe * g_ltc_transform[0];  // the setup's results stay live; no polygon integral
+#else
     sum += g_ltc_lobe * ltc_polygon_integral(i, n, g_ltc_transform, x);
+#endif
 #endif
     return sum * head.rgb;
 }

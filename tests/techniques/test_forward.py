@@ -1,0 +1,39 @@
+"""The forward pass's compile-time light counts: each light type's code exists only when the scene has one."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import reflets
+
+LIGHTS = {
+    "point": {"type": "point", "position": [0.5, 1.5, 0.2], "intensity": [3, 2, 1]},
+    "directional": {"type": "directional", "direction": [0.3, -1, -0.2], "irradiance": [0.5, 0.6, 0.7]},
+    "quad": {"type": "quad", "corners": [[-0.5, 1, -0.5], [0.5, 1, -0.5], [-0.5, 1, 0.5]], "radiance": [2, 2, 2]},
+}
+
+
+def scene(lights):
+    return reflets.load_dict(
+        {
+            "camera": {"position": [0, 3, 4], "look_at": [0, 0, 0], "fov_y": 45, "size": [64, 48]},
+            "materials": {"m": {"type": "microfacet", "distribution": "ggx", "alpha": 0.4, "diffuse": [0.3] * 3}},
+            "mesh": [{"shape": "plane", "size": [4, 4], "material": "m"}],
+            "light": lights,
+        }
+    )
+
+
+def test_every_light_type_adds_its_own_contribution():
+    """Linearity: the image with all light types is the sum of the images with each alone (a type whose code
+    were compiled out by a wrong count would be missing from the sum; an empty scene is black)."""
+    alone = {name: reflets.render(scene([light]), method="forward") for name, light in LIGHTS.items()}
+    together = reflets.render(scene(list(LIGHTS.values())), method="forward")
+    # the quad's emitter hides part of the plane in every image that has it: compare where the plane is seen
+    positions = reflets.render(scene([LIGHTS["quad"]]), method="position")
+    plane = (np.abs(positions[..., 1]) < 1e-4) & np.any(positions != 0, axis=-1)
+    seen = plane & np.any(alone["quad"] > 0, axis=-1)  # the camera sees the emitter's black back side
+    expected = sum(alone.values())
+    assert all(img[seen].max() > 0.01 for img in alone.values())
+    np.testing.assert_allclose(together[seen], expected[seen], rtol=1e-5, atol=1e-6)
+    assert reflets.render(scene([]), method="forward").max() == 0.0
