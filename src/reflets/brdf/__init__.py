@@ -14,11 +14,12 @@ from .lambert import Lambert
 from .measured import Measured
 from .microfacet import Microfacet
 from .phong import Phong
+from .translucent import Translucent
 from .ward import Ward
 
 #: the scene-file form of any registered material, chosen by its ``type`` key
 MaterialSpec = Annotated[
-    Lambert | Phong | BlinnPhong | Lafortune | Ward | AshikhminShirley | Microfacet | Measured,
+    Lambert | Phong | BlinnPhong | Lafortune | Ward | AshikhminShirley | Microfacet | Measured | Translucent,
     Field(discriminator="type"),
 ]
 
@@ -35,4 +36,5 @@ __all__ = [
     "AshikhminShirley",
     "Microfacet",
     "Measured",
+    "Translucent",
 ]

@@ -59,6 +59,7 @@ PROPERTIES = {
     "ashikhmin_shirley": ("yes", "yes"),
     "microfacet": ("yes", "when diffuse + specular·max F ≤ 1 (single scattering loses energy)"),
     "measured": ("yes (φd folding)", "not guaranteed (measured noise, extrapolation near grazing)"),
+    "translucent": ("yes", "yes (F_R + F_T·R_total ≤ 1; the far-field BRDF of the medium, see translucency.md)"),
 }
 
 

@@ -4,9 +4,10 @@
 // Real relative index eta = n_inside / n_outside; total internal reflection (eta < 1) gives 1.
 float fresnel_dielectric(float cos_i, float eta) {
     cos_i = clamp(cos_i, 0.0, 1.0);
-    float sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if (sin2_t >= 1.0) return 1.0;
-    float cos_t = sqrt(1.0 - sin2_t);
+    // cos²θt = 1 − sin²θi/η², written so that it does not cancel at grazing incidence for η near 1
+    float cos2_t = (eta * eta - 1.0 + cos_i * cos_i) / (eta * eta);
+    if (cos2_t <= 0.0) return 1.0;  // total internal reflection
+    float cos_t = sqrt(cos2_t);
     float rs = (cos_i - eta * cos_t) / max(cos_i + eta * cos_t, 1e-30);
     float rp = (eta * cos_i - cos_t) / max(eta * cos_i + cos_t, 1e-30);
     return 0.5 * (rs * rs + rp * rp);
