@@ -1,6 +1,6 @@
 """Rendering techniques, registered by name for ``--method`` / ``render(method=...)``."""
 
-from . import arealights, forward  # noqa: F401  (registers forward, the AOV methods, the area-light methods)
+from . import arealights, forward, translucency  # noqa: F401  (registers every method)
 from .base import TECHNIQUES, Technique, TechniqueParams, get_technique, register_technique
 
 DEFAULT_METHOD = "forward"

@@ -153,7 +153,8 @@ class Forward(Technique):
             data = mesh_data(scene, index)
             points.append(data.positions)
             material = scene.materials[mesh.material]
-            program = get_program(ctx, self.program_spec, slots=self.slots(material), **self.flags(material))
+            spec = self.program_for(material)
+            program = get_program(ctx, spec, slots=self.slots(material), **self.flags(material))
             vbo = ctx.buffer(data.interleaved().tobytes())
             ibo = ctx.buffer(data.indices.tobytes())
             vao = ctx.vertex_array(
@@ -193,6 +194,10 @@ class Forward(Technique):
     # ------------------------------------------------------------------ hooks for techniques built on this pass
     #: the mesh shading program (techniques swap the fragment stage)
     program_spec: ClassVar[ProgramSpec] = MESH_PROGRAM
+
+    def program_for(self, material) -> ProgramSpec:
+        """The mesh program of a material (techniques that shade some materials specially override this)."""
+        return self.program_spec
 
     def slots(self, material) -> dict[str, str]:
         """GLSL include slots of the mesh program for one material."""

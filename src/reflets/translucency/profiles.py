@@ -113,3 +113,37 @@ def total_reflectance(profile: str, medium: Medium) -> np.ndarray:
         value, _ = integrate.quad(integrand, lo, hi, limit=400, epsabs=1e-12, epsrel=1e-10)
         out[c] = value
     return out.reshape(np.shape(medium.sigma_a)) if np.ndim(medium.sigma_a) else out
+
+
+def glsl_uniforms(profile: str, medium: Medium) -> dict[str, tuple]:
+    """Per-channel constants of ``profile_rd`` in shaders/profiles.glsl (vec3 uniforms ``p_*``, mm units)."""
+
+    def vec(a) -> tuple:
+        return tuple(float(x) for x in np.broadcast_to(np.asarray(a, dtype=np.float64), (3,)))
+
+    if profile == "normalized_diffusion":
+        A = total_reflectance("better_dipole", medium)
+        s = (1.85 - A + 7.0 * np.abs(A - 0.8) ** 3) * medium.sigma_t
+        return {"p_A": vec(A), "p_s": vec(s)}
+    t = _dipole_terms(medium, better=profile == "better_dipole")
+    return {
+        "p_zr": vec(t["z_r"]),
+        "p_zv": vec(t["z_v"]),
+        "p_str": vec(t["sigma_tr"]),
+        "p_ce": vec(t["c_e"]),
+        "p_cphi_over_d": vec(t["c_phi"] / t["D"]),
+        "p_cn": vec(t["c_n"]),
+    }
+
+
+def capture_radius(profile: str, medium: Medium, fraction: float = 0.99) -> float:
+    """The radius (mm) within which ``fraction`` of every channel's total reflectance R_total lies: the sampling
+    radius a ring integral needs (low-absorption media such as marble spread over tens of mean free paths)."""
+    mfp = float(np.max(medium.mean_free_path))
+    r = np.geomspace(1e-6 * mfp, 1e4 * mfp, 4001)
+    f = 2.0 * np.pi * r[:, None] * profile_rd(profile, r[:, None], medium).reshape(len(r), -1)
+    cumulative = np.concatenate(
+        [np.zeros((1, f.shape[1])), np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(r)[:, None], axis=0)]
+    )
+    cumulative /= cumulative[-1]
+    return float(max(np.interp(fraction, cumulative[:, c], r) for c in range(f.shape[1])))

@@ -1,0 +1,25 @@
+// Provides profile_rd(r): the diffusion profile R_d at distance r (mm), per RGB channel — twin of
+// reflets/translucency/profiles.py (constants p_* from profiles.glsl_uniforms). PROFILE: 0 dipole,
+// 1 better dipole, 2 normalised diffusion.
+#if PROFILE == 2
+uniform vec3 p_A;
+uniform vec3 p_s;
+vec3 profile_rd(float r) {
+    r = max(r, 1e-6);
+    return p_A * p_s * (exp(-p_s * r) + exp(-p_s * r / 3.0)) / (8.0 * PI * r);
+}
+#else
+uniform vec3 p_zr;
+uniform vec3 p_zv;
+uniform vec3 p_str;
+uniform vec3 p_ce;
+uniform vec3 p_cphi_over_d;
+uniform vec3 p_cn;
+vec3 profile_rd(float r) {
+    vec3 dr = sqrt(r * r + p_zr * p_zr);
+    vec3 dv = sqrt(r * r + p_zv * p_zv);
+    vec3 real_source = (p_ce * p_zr * (p_str * dr + 1.0) / (dr * dr) + p_cphi_over_d) * exp(-p_str * dr) / dr;
+    vec3 virtual_source = (p_ce * p_zv * (p_str * dv + 1.0) / (dv * dv) + p_cphi_over_d) * exp(-p_str * dv) / dv;
+    return p_cn * (real_source - virtual_source);
+}
+#endif

@@ -1,0 +1,173 @@
+// Provides the camera pass of the translucency technique for one translucent material (slot BRDF =
+// translucent.glsl): the interface's specular reflection of the light (shadowed through the light view), single
+// scattering by a ray march along the refracted view ray, and multiple scattering by the ring integral of the
+// diffusion profile over the light view (reflets/techniques/translucency/technique.py explains each term).
+// Flags: LIGHT_DIRECTIONAL, PROFILE, SS_NODES (k_max + 1), RINGS, ANGLES, TERMS (bit 1 specular, 2 single,
+// 4 multiple).
+#include BRDF
+#include "reflets/techniques/translucency/shaders/profiles.glsl"
+
+in vec3 v_position;
+in vec3 v_normal;
+in vec4 v_tangent;
+in vec2 v_uv;
+
+uniform vec3 u_eye;
+uniform mat4 u_light_view_proj;
+uniform sampler2D u_light_position;  // world position of the lit surface, w = 1 where there is one
+uniform sampler2D u_light_normal;
+uniform vec3 u_light_vector;         // directional: unit vector towards the light; point: its position
+uniform vec3 u_light_power;          // directional: irradiance on a plane facing it; point: intensity
+uniform float u_shadow_bias;         // scene units: how far the lit surface may lie from the shaded point
+
+uniform vec3 a_sigma_s;              // 1/mm
+uniform vec3 a_sigma_t;              // 1/mm
+uniform float a_g;
+uniform float a_mm_per_unit;
+uniform vec3 a_diffuse_norm;         // 1 / (π (1 − 2 C1_out))
+uniform float a_ss_depth[SS_NODES];  // march depths in mean free paths 1/σ_t
+uniform float a_ss_weight[SS_NODES]; // their quadrature weights (same units)
+uniform float a_ring_radius[RINGS + 1];  // scene units
+uniform vec3 a_ring_weight[RINGS + 1];   // per node of ring j (mm², × the profile for "product"), centre: ANGLES copies
+uniform vec3 a_ring_inv_rd[RINGS + 1];   // "product": 1 / R_d(max(ρ_j, floor)); "bilinear": 1
+uniform float a_rd_floor;                // mm ("product": the distance below which R_d is held constant)
+
+out vec4 f_color;
+
+vec3 to_light(vec3 x) {
+#if LIGHT_DIRECTIONAL
+    return u_light_vector;
+#else
+    return normalize(u_light_vector - x);
+#endif
+}
+
+vec3 light_irradiance(vec3 x) {
+#if LIGHT_DIRECTIONAL
+    return u_light_power;
+#else
+    vec3 d = u_light_vector - x;
+    return u_light_power / dot(d, d);
+#endif
+}
+
+// Distance from p back to the lit surface point xi along the light ray: a difference of distances to the light
+// (a depth map's measure), which the map's lateral quantisation does not bias as |p − xi| would.
+float light_distance(vec3 p, vec3 xi) {
+#if LIGHT_DIRECTIONAL
+    return max(dot(xi - p, u_light_vector), 0.0);
+#else
+    return max(length(u_light_vector - p) - length(u_light_vector - xi), 0.0);
+#endif
+}
+
+// The first surface along the light ray through p: its position and normal (false if none).
+bool light_lookup(vec3 p, out vec3 xi, out vec3 ni) {
+    vec4 clip = u_light_view_proj * vec4(p, 1.0);
+    xi = vec3(0.0);
+    ni = vec3(0.0, 0.0, 1.0);
+    if (clip.w <= 0.0) return false;
+    vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return false;
+    vec4 a = textureLod(u_light_position, uv, 0.0);
+    xi = a.xyz;
+    ni = textureLod(u_light_normal, uv, 0.0).xyz;
+    return a.w > 0.5;
+}
+
+float hg_phase(float cos_theta, float g) {
+    float d = 1.0 + g * g - 2.0 * g * cos_theta;
+    return (1.0 - g * g) / (4.0 * PI * d * sqrt(d));
+}
+
+// Light entering at xi (normal ni): transmitted flux density along the refracted beam, F_T E⊥ μ/μ', and the
+// refracted direction of travel; false when the light does not reach xi's outside.
+bool entering(vec3 xi, vec3 ni, out vec3 beam, out vec3 travel, out float cos_ratio) {
+    vec3 wl = to_light(xi);
+    float mu = dot(ni, wl);
+    beam = vec3(0.0);
+    travel = -ni;
+    cos_ratio = 1.0;
+    if (mu <= 0.0) return false;
+    float mu_t = sqrt(max(1.0 - (1.0 - mu * mu) / (m_eta * m_eta), 1e-12));
+    travel = refract(-wl, ni, 1.0 / m_eta);
+    cos_ratio = mu / mu_t;
+    beam = (1.0 - fresnel_dielectric(mu, m_eta)) * light_irradiance(xi);
+    return true;
+}
+
+vec3 single_scattering(vec3 x, vec3 n, vec3 wo) {
+    vec3 t_o = refract(-wo, n, 1.0 / m_eta);  // the view ray inside the medium
+    vec3 sum = vec3(0.0);
+    for (int c = 0; c < 3; ++c) {
+        float sigma_t = a_sigma_t[c];
+        float total = 0.0;
+        for (int k = 0; k < SS_NODES; ++k) {
+            float s = a_ss_depth[k] / sigma_t;  // mm along the refracted view ray
+            vec3 p = x + t_o * (s / a_mm_per_unit);
+            vec3 xi, ni;
+            if (!light_lookup(p, xi, ni)) continue;
+            // p outside, in front of the lit surface (beyond the map's quantisation: p = x at k = 0 is on it)
+            if (dot(p - xi, to_light(xi)) > u_shadow_bias) continue;
+            vec3 beam, travel;
+            float cos_ratio;
+            if (!entering(xi, ni, beam, travel, cos_ratio)) continue;
+            float s_line = light_distance(p, xi) * a_mm_per_unit;
+            float s_refracted = s_line * cos_ratio;  // the document's Snell correction of the light's path
+            float phase = hg_phase(dot(travel, -t_o), a_g);
+            total += a_ss_weight[k] / sigma_t * phase * beam[c] * cos_ratio * exp(-sigma_t * (s_refracted + s));
+        }
+        sum[c] = a_sigma_s[c] * total;
+    }
+    return sum * (1.0 - fresnel_dielectric(dot(n, wo), m_eta)) / (m_eta * m_eta);
+}
+
+// One ring node: the flux density entering the surface point the light sees there × R_d at the true distance
+// ("product": relative to the profile at the node's plane distance, which the weights already integrate).
+vec3 ring_node(vec3 x, vec3 p, int j) {
+    vec3 xi, ni, beam, travel;
+    float cos_ratio;
+    if (!light_lookup(p, xi, ni) || !entering(xi, ni, beam, travel, cos_ratio)) return vec3(0.0);
+    return profile_rd(max(length(xi - x) * a_mm_per_unit, a_rd_floor)) * a_ring_inv_rd[j] * beam;
+}
+
+vec3 multiple_scattering(vec3 x, vec3 n, vec3 wo) {
+    vec3 wl = to_light(x);
+    mat3 basis = shading_frame(wl, vec4(0.0));  // columns: two axes of the plane orthogonal to the light, wl
+    vec3 sum = ring_node(x, x, 0) * a_ring_weight[0] * float(ANGLES);
+    for (int j = 1; j <= RINGS; ++j) {
+        vec3 ring = vec3(0.0);
+        for (int a = 0; a < ANGLES; ++a) {
+            float theta = TWO_PI * float(a) / float(ANGLES);
+            vec3 p = x + a_ring_radius[j] * (cos(theta) * basis[0] + sin(theta) * basis[1]);
+            ring += ring_node(x, p, j);
+        }
+        sum += a_ring_weight[j] * ring;
+    }
+    return sum * a_diffuse_norm * (1.0 - fresnel_dielectric(dot(n, wo), m_eta));
+}
+
+void main() {
+    vec3 n = normalize(v_normal);
+    if (!gl_FrontFacing) n = -n;
+    vec3 x = v_position;
+    vec3 wo = normalize(u_eye - x);
+    vec3 color = vec3(0.0);
+#if (TERMS & 1) != 0
+    vec3 wl = to_light(x);
+    vec3 xi, ni;
+    bool lit = light_lookup(x, xi, ni) && length(xi - x) < u_shadow_bias;
+    float cos_l = dot(n, wl);
+    if (lit && cos_l > 0.0 && dot(n, wo) > 0.0) {
+        mat3 frame = shading_frame(n, v_tangent);
+        color += vec3(tr_specular(transpose(frame) * wo, transpose(frame) * wl)) * light_irradiance(x) * cos_l;
+    }
+#endif
+#if (TERMS & 2) != 0
+    color += single_scattering(x, n, wo);
+#endif
+#if (TERMS & 4) != 0
+    color += multiple_scattering(x, n, wo);
+#endif
+    f_color = vec4(color, 1.0);
+}

@@ -1,0 +1,103 @@
+"""The ``translucent`` GPU technique on a flat slab against the models' closed forms and NumPy twins."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import reflets
+from reflets.errors import ArgumentError
+from reflets.techniques.translucency import rings
+from reflets.translucency import Medium, half_space_single_scattering, profile_rd, total_reflectance
+from reflets.translucency.optics import fresnel_moment, fresnel_transmittance
+
+
+def slab(material: dict, light: dict, camera=((0, 3, 0.001), (0, 0, 0)), size=(32, 32), fov=20):
+    return reflets.load_dict(
+        {
+            "camera": {"position": list(camera[0]), "look_at": list(camera[1]), "fov_y": fov, "size": list(size)},
+            "materials": {"m": {"type": "translucent", "mm_per_unit": 10.0, **material}},
+            "mesh": [{"shape": "plane", "size": [10, 10], "material": "m"}],
+            "light": [light],
+        }
+    )
+
+
+OVERHEAD = {"type": "directional", "direction": [0, -1, 0], "irradiance": [1, 1, 1]}
+
+
+@pytest.mark.parametrize("profile", ["dipole", "better_dipole", "normalized_diffusion"])
+@pytest.mark.parametrize("preset", ["skin1", "marble"])
+def test_multiple_scattering_on_a_uniformly_lit_slab_gives_the_total_reflectance(preset, profile):
+    """Centre of a 100 mm slab lit from above, seen from above: F_T F_T R_total/(πc) within 3 % (product rule)."""
+    scene = slab({"preset": preset, "profile": profile}, OVERHEAD)
+    image = reflets.render(scene, method="translucent", terms=["multiple"])
+    material = scene.materials["m"]
+    f0 = 1 - fresnel_transmittance(1.0, material.eta)
+    c = 1 - 2 * fresnel_moment(1, material.eta, inside=False)
+    expected = (1 - f0) ** 2 * total_reflectance(profile, material.medium()) / (np.pi * c)
+    measured = image[14:18, 14:18].reshape(-1, 3).mean(axis=0)
+    np.testing.assert_allclose(measured, expected, rtol=0.03)
+
+
+def test_the_documents_bilinear_rule_overestimates_and_converges():
+    scene = slab({"preset": "skin1"}, OVERHEAD)
+    coarse = reflets.render(scene, method="translucent", terms=["multiple"], ms_quadrature="bilinear")
+    fine = reflets.render(scene, method="translucent", terms=["multiple"], ms_quadrature="bilinear", rings=48)
+    product = reflets.render(scene, method="translucent", terms=["multiple"])
+    c, f, p = (img[14:18, 14:18].mean(axis=(0, 1)) for img in (coarse, fine, product))
+    assert np.all(c > p * 1.01) and np.all(np.abs(f / p - 1) < 0.01)
+
+
+@pytest.mark.parametrize(
+    "light, camera",
+    [
+        (OVERHEAD, ((0, 3, 0.001), (0, 0, 0))),
+        ({"type": "directional", "direction": [0.6, -0.8, 0], "irradiance": [2, 2, 2]}, ((0, 3, 0.001), (0, 0, 0))),
+        ({"type": "directional", "direction": [0, -0.9, 0.43589], "irradiance": [1, 1, 1]}, ((0, 2, 2), (0, 0, 0))),
+    ],
+)
+def test_single_scattering_on_a_slab_matches_hanrahan_krueger(light, camera):
+    scene = slab({"preset": "skin1", "g": 0.3}, light, camera=camera, size=(33, 33), fov=10)
+    image = reflets.render(scene, method="translucent", terms=["single"])
+    d = -np.asarray(light["direction"], dtype=np.float64)
+    d /= np.linalg.norm(d)
+    eye = np.asarray(camera[0], dtype=np.float64)
+    view = eye / np.linalg.norm(eye)  # the centre pixel sees the origin
+    phi = np.arctan2(view[2], view[0]) - np.arctan2(d[2], d[0]) if np.hypot(d[0], d[2]) > 1e-6 else 0.0
+    medium = scene.materials["m"].medium()
+    expected = half_space_single_scattering(medium, d[1], view[1], phi, irradiance=light["irradiance"][0])
+    np.testing.assert_allclose(image[16, 16], expected, rtol=0.02)
+
+
+def test_ring_weights_integrate_bilinear_functions_exactly():
+    radii = rings.ring_radii(3.0, 7, 0.3)
+    w = rings.ring_weights(radii, 12)
+    a, b = 0.7, 1.3  # c = a + b ρ is reproduced exactly by the bilinear interpolant
+    assert np.sum(w * 12 * (a + b * radii)) == pytest.approx(2 * np.pi * (a * 9 / 2 + b * 27 / 3), rel=1e-12)
+
+
+def test_product_weights_integrate_the_profile():
+    medium = Medium.preset("skin1")
+    radii = rings.ring_radii(200.0 * float(np.max(medium.mean_free_path)), 12, 0.2)
+    w = rings.product_weights(radii, 14, lambda r: profile_rd("better_dipole", np.asarray(r)[..., None], medium))
+    np.testing.assert_allclose(14 * w.sum(axis=0), total_reflectance("better_dipole", medium), rtol=1e-4)
+
+
+@pytest.mark.parametrize(
+    "lights, message",
+    [
+        ([], "exactly one point or directional light"),
+        ([OVERHEAD, OVERHEAD], "exactly one point or directional light"),
+        ([{"type": "point", "position": [0, 0.1, 0], "intensity": [1, 1, 1]}], "outside the scene's bounding sphere"),
+    ],
+)
+def test_unsupported_lighting_is_a_clear_error(lights, message):
+    scene = slab({"preset": "skin1"}, OVERHEAD)
+    scene = scene.model_copy(update={"light": [scene.light[0].__class__(**lt) for lt in lights[:0]] or []})
+    from reflets.scene.model import DirectionalLight, PointLight
+
+    built = [PointLight(**lt) if lt["type"] == "point" else DirectionalLight(**lt) for lt in lights]
+    scene = scene.model_copy(update={"light": built})
+    with pytest.raises(ArgumentError, match=message):
+        reflets.render(scene, method="translucent")
