@@ -77,6 +77,11 @@ DEMO: list[DemoEntry] = [
     DemoEntry("12_ref_sphere_env.toml", reference=True),
     DemoEntry("20_arealight_phong.toml", AREA_METHODS, reference=True, visibility=False),
     DemoEntry("21_arealight_ggx.toml", AREA_METHODS, reference=True, visibility=False),
+    DemoEntry(
+        "30_translucent_slab.toml",
+        (Method("translucent"), Method("translucent", (("ms_quadrature", "bilinear"),)), Method("forward")),
+    ),
+    DemoEntry("31_translucent_bunny.toml", (Method("translucent"), Method("forward"))),
 ]
 
 
