@@ -17,9 +17,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from rich.progress import Progress
 
 from ..translucency.medium import Medium
-from ..translucency.optics import fresnel_reflectance, refracted_cos, sample_henyey_greenstein
+from ..translucency.optics import fresnel_reflectance, henyey_greenstein, refracted_cos, sample_henyey_greenstein
 
 
 @dataclass
@@ -245,11 +246,9 @@ def render_volumetric(scene, spp: int = 16, *, seed: int = 0, size=None, progres
     else:
         light_pos = np.asarray(light.position, np.float64)
         power = np.asarray(light.intensity, np.float64)
-    from rich.progress import Progress
-
     with Progress(disable=not progress, transient=True) as bar:
         task = bar.add_task("volumetric reference", total=spp * 3)
-        for s in range(spp):
+        for _ in range(spp):
             for c in range(3):
                 sigma_t = float(medium.sigma_t[c]) * scale
                 albedo = float(medium.albedo[c])
@@ -279,8 +278,6 @@ def render_volumetric(scene, spp: int = 16, *, seed: int = 0, size=None, progres
                         wl = v / dist[:, None]
                         incident = power[c] / (dist * dist)
                     inside = _inside_length(geometry, pos[stay], np.ascontiguousarray(wl), dist)
-                    from ..translucency.optics import henyey_greenstein
-
                     phase = henyey_greenstein(np.sum(d[stay] * wl, axis=1), medium.g)
                     acc[stay] += wgt[stay] * phase * incident * np.exp(-sigma_t * inside)
                     cos_t = sample_henyey_greenstein(medium.g, rng.random(stay.size))
