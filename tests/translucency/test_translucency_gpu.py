@@ -7,6 +7,7 @@ import pytest
 
 import reflets
 from reflets.errors import ArgumentError
+from reflets.scene.model import DirectionalLight, PointLight
 from reflets.techniques.translucency import rings
 from reflets.translucency import Medium, half_space_single_scattering, profile_rd, total_reflectance
 from reflets.translucency.optics import fresnel_moment, fresnel_transmittance
@@ -93,11 +94,22 @@ def test_product_weights_integrate_the_profile():
     ],
 )
 def test_unsupported_lighting_is_a_clear_error(lights, message):
-    scene = slab({"preset": "skin1"}, OVERHEAD)
-    scene = scene.model_copy(update={"light": [scene.light[0].__class__(**lt) for lt in lights[:0]] or []})
-    from reflets.scene.model import DirectionalLight, PointLight
-
     built = [PointLight(**lt) if lt["type"] == "point" else DirectionalLight(**lt) for lt in lights]
-    scene = scene.model_copy(update={"light": built})
+    scene = slab({"preset": "skin1"}, OVERHEAD).model_copy(update={"light": built})
     with pytest.raises(ArgumentError, match=message):
         reflets.render(scene, method="translucent")
+
+
+def test_cli_terms_and_lighting_errors(tmp_path, capsys):
+    from reflets.cli import main
+
+    scenes = __import__("reflets.demo", fromlist=["scene_path"]).scene_path
+    out = tmp_path / "bunny.exr"
+    code = main(
+        ["render", str(scenes("31_translucent_bunny.toml")), "--method", "translucent", "--size", "40x30",
+         "--param", "terms=single,multiple", "-o", str(out)]
+    )  # fmt: skip
+    assert code == 0 and out.exists()
+    code = main(["render", str(scenes("04_bunny_arealight.toml")), "--method", "translucent", "-o", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "exactly one point or directional light" in err and "Traceback" not in err

@@ -29,7 +29,7 @@ from typing import ClassVar, Literal
 
 import moderngl
 import numpy as np
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from ...brdf.translucent import Translucent
 from ...errors import ArgumentError
@@ -82,6 +82,12 @@ class TranslucencyParams(ForwardParams):
     terms: tuple[Literal["specular", "single", "multiple"], ...] = Field(
         ("specular", "single", "multiple"), description="which terms to render (breakdowns, tests)"
     )
+
+    @field_validator("terms", mode="before")
+    @classmethod
+    def _split_terms(cls, value):
+        """``--param terms=single,multiple`` from the command line: a comma-separated string."""
+        return tuple(t.strip() for t in value.split(",")) if isinstance(value, str) else value
 
 
 @register_technique
