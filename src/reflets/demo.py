@@ -82,6 +82,7 @@ DEMO: list[DemoEntry] = [
         (Method("translucent"), Method("translucent", (("ms_quadrature", "bilinear"),)), Method("forward")),
     ),
     DemoEntry("31_translucent_bunny.toml", (Method("translucent"), Method("forward"))),
+    DemoEntry("32_translucent_dragon.toml", (Method("translucent"),)),
 ]
 
 

@@ -41,6 +41,17 @@ def test_multiple_scattering_on_a_uniformly_lit_slab_gives_the_total_reflectance
     np.testing.assert_allclose(measured, expected, rtol=0.03)
 
 
+@pytest.mark.parametrize("profile", ["dipole", "better_dipole", "normalized_diffusion"])
+def test_multiple_scattering_under_oblique_light_keeps_the_slab_energy(profile):
+    """Light at 37° from the normal (index-matched, so F_T = 1): E cosθ R_total/π. Checks the stretch of true
+    over plane distances, and the closed-form first cell of the product rule (a singular profile's energy)."""
+    light = {"type": "directional", "direction": [0.6, -0.8, 0], "irradiance": [1, 1, 1]}
+    scene = slab({"preset": "skin1", "profile": profile, "eta": 1.0}, light)
+    image = reflets.render(scene, method="translucent", terms=["multiple"])
+    expected = 0.8 * total_reflectance(profile, scene.materials["m"].medium()) / np.pi
+    np.testing.assert_allclose(image[14:18, 14:18].mean(axis=(0, 1)), expected, rtol=0.03)
+
+
 def test_the_documents_bilinear_rule_overestimates_and_converges():
     scene = slab({"preset": "skin1"}, OVERHEAD)
     coarse = reflets.render(scene, method="translucent", terms=["multiple"], ms_quadrature="bilinear")

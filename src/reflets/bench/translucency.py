@@ -8,7 +8,7 @@ technique's cost on the document's Fig 7.2 settings.
    scattering is its own term).
 2. **GPU on a flat slab**: multiple scattering of a uniformly lit slab against F_T F_T R_total/(πc), single
    scattering against the Hanrahan–Krueger closed form.
-3. **Cost on the Stanford bunny at 100 mm** (skin1, 1024×768, the object covering ≈ 500×500 px): median frame
+3. **Cost on the document's Fig 7.2 objects** (bunny 100 mm skin1, dragon marble; 1024×768): median frame
    time at the document's sample counts 168 / 336 / 1200 (rings × angles) and radii 10 / 15 / 30 mean free
    paths, per term, and of the forward pass (far-field BRDF) for scale.
 4. **Image error on the bunny** against volumetric path tracing (reflets.reference.volumetric), per profile,
@@ -85,22 +85,34 @@ def _slab_gpu() -> dict:
     return out
 
 
-def _bunny_costs(size, frames: int, settings) -> list[dict]:
+def _object_scene(mesh: str, preset: str, mm_per_unit: float, size, eta=None, profile="better_dipole"):
+    """The Fig 7.2 objects: a built-in mesh (unit height) in a preset, one point light, framed ≈ 500×500 px at
+    1024×768."""
     import reflets
 
-    from ..gpu import get_context
-    from ..techniques import get_technique
-
-    scene = reflets.load_dict(
+    path = str(Path(reflets.__file__).parent / "data" / "meshes" / mesh)
+    material = {"type": "translucent", "preset": preset, "roughness": 0.3, "mm_per_unit": mm_per_unit}
+    material.update({"profile": profile} if eta is None else {"profile": profile, "eta": eta})
+    return reflets.load_dict(
         {
             "camera": {"position": [0.2, 0.55, 1.25], "look_at": [0, 0.42, 0], "fov_y": 35, "size": list(size)},
-            "materials": {"skin": {"type": "translucent", "preset": "skin1", "roughness": 0.35, "mm_per_unit": 100}},
-            "mesh": [
-                {"file": str(Path(reflets.__file__).parent / "data" / "meshes" / "bunny.ply"), "material": "skin"}
-            ],
+            "materials": {"m": material},
+            "mesh": [{"file": path, "material": "m"}],
             "light": [{"type": "point", "position": [-1.2, 2.0, 2.0], "intensity": [12, 12, 12]}],
         }
     )
+
+
+OBJECTS = {
+    "bunny, skin1, 100 mm": ("bunny.ply", "skin1", 100.0),
+    "dragon, marble, 200 mm": ("dragon.ply", "marble", 140.0),
+}
+
+
+def _costs(scene, size, frames: int, settings) -> list[dict]:
+    from ..gpu import get_context
+    from ..techniques import get_technique
+
     ctx = get_context()
     cases = [("forward (far-field BRDF)", "forward", {})]
     for label, rings, angles, radius in settings:
@@ -132,21 +144,6 @@ def _bunny_costs(size, frames: int, settings) -> list[dict]:
     return rows
 
 
-def _bunny_scene(size, eta: float = 1.0, profile: str = "better_dipole"):
-    import reflets
-
-    mesh = str(Path(reflets.__file__).parent / "data" / "meshes" / "bunny.ply")
-    material = {"type": "translucent", "preset": "skin1", "eta": eta, "profile": profile, "mm_per_unit": 100}
-    return reflets.load_dict(
-        {
-            "camera": {"position": [0.2, 0.55, 1.25], "look_at": [0, 0.42, 0], "fov_y": 35, "size": list(size)},
-            "materials": {"skin": material},
-            "mesh": [{"file": mesh, "material": "skin"}],
-            "light": [{"type": "point", "position": [-1.2, 2.0, 2.0], "intensity": [12, 12, 12]}],
-        }
-    )
-
-
 def _bunny_errors(size, spp: int, out_dir: Path) -> dict:
     """Image error of each profile (default settings) against volumetric path tracing, index-matched bunny."""
     import reflets
@@ -155,13 +152,15 @@ def _bunny_errors(size, spp: int, out_dir: Path) -> dict:
     from ..metrics import flip
     from ..reference.volumetric import render_volumetric
 
-    ref = render_volumetric(_bunny_scene(size), spp=spp, seed=7)
+    ref = render_volumetric(_object_scene("bunny.ply", "skin1", 100.0, size, eta=1.0), spp=spp, seed=7)
     m = ref.mask
     noise = float(np.mean(ref.stderr[m] ** 2) / np.mean(ref.image[m] ** 2))
     write_image(out_dir / "translucency_bunny_reference.png", ref.image)
     rows = []
     for profile in ("dipole", "better_dipole", "normalized_diffusion"):
-        image = reflets.render(_bunny_scene(size, profile=profile), method="translucent")
+        image = reflets.render(
+            _object_scene("bunny.ply", "skin1", 100.0, size, eta=1.0, profile=profile), method="translucent"
+        )
         write_image(out_dir / f"translucency_bunny_{profile}.png", image)
         rows.append(
             {
@@ -181,13 +180,16 @@ def bench_translucency(quick: bool, out_dir: Path) -> tuple[dict, str]:
     settings = FIG_72[:1] if quick else FIG_72
     slab = _slab_table(photons)
     gpu = _slab_gpu()
-    costs = _bunny_costs(size, 3 if quick else 5, settings)
+    costs = {
+        name: _costs(_object_scene(mesh, preset, mm, size), size, 3 if quick else 5, settings)
+        for name, (mesh, preset, mm) in (list(OBJECTS.items())[:1] if quick else OBJECTS.items())
+    }
     errors = _bunny_errors((128, 96) if quick else (512, 384), 16 if quick else 48, out_dir)
     results = {
         "photons": photons,
         "slab": slab,
         "slab_gpu": gpu,
-        "bunny": {"size": list(size), "rows": costs},
+        "cost": {"size": list(size), "objects": costs},
         "bunny_error": errors,
     }
     plot(slab, out_dir / "translucency.png")
@@ -235,21 +237,22 @@ def _markdown(r: dict) -> str:
         ms = ", ".join(_pct(e) for e in v["multiple_rel_error"])
         ss = ", ".join(_pct(e) for e in v["single_rel_error"])
         lines.append(f"| {preset} | {ms} | {ss} |")
-    size = r["bunny"]["size"]
-    lines += [
-        "",
-        f"## Cost: Stanford bunny at 100 mm, skin1, {size[0]}×{size[1]}, one point light",
-        "",
-        "Median frame time (draw only: light view + camera pass), interleaved rounds. rings × angles = samples.",
-        "",
-        "| case | ms / frame |",
-        "|---|---|",
-    ]
-    for row in r["bunny"]["rows"]:
-        if row["frame_ms"] is None:
-            lines.append(f"| {row['case']} | {row['coverage']:.1%} |")
-        else:
-            lines.append(f"| {row['case']} | {row['frame_ms']:.1f} |")
+    size = r["cost"]["size"]
+    for name, rows in r["cost"]["objects"].items():
+        lines += [
+            "",
+            f"## Cost: {name}, {size[0]}×{size[1]}, one point light",
+            "",
+            "Median frame time (draw only: light view + camera pass), interleaved rounds. rings × angles = samples.",
+            "",
+            "| case | ms / frame |",
+            "|---|---|",
+        ]
+        for row in rows:
+            if row["frame_ms"] is None:
+                lines.append(f"| {row['case']} | {row['coverage']:.1%} |")
+            else:
+                lines.append(f"| {row['case']} | {row['frame_ms']:.1f} |")
     e = r["bunny_error"]
     lines += [
         "",

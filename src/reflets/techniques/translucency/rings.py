@@ -57,17 +57,18 @@ def fit_beta(rd, r_max: float, samples: int = 2001) -> float:
     return float(result.x)
 
 
-def product_weights(radii: np.ndarray, angles: int, rd, order: int = 32) -> np.ndarray:
+def product_weights(radii: np.ndarray, angles: int, rd, order: int = 32, first_cell: bool = True) -> np.ndarray:
     """Product integration: W_j = Δθ ∫ R_d(ρ) ρ hat_j(ρ) dρ per channel (hat_j the piecewise-linear basis of node
     j), so that Σ_j W_j Σ_a e(ρ_j, θ_a) integrates R_d exactly and interpolates only the smooth factor e
     (transmitted flux density × R_d(true)/R_d(plane)). ``rd(r)`` → (..., 3). Exact for a uniformly lit plane,
-    where the bilinear rule overestimates the convex profile (+2…5 % at 12 rings, skin1)."""
+    where the bilinear rule overestimates the convex profile (+2…5 % at 12 rings, skin1). ``first_cell =
+    False`` leaves out the disc ρ < ρ₁ (the shader integrates it per direction, see translucent.frag)."""
     rho = np.asarray(radii, dtype=np.float64)
     t, w = np.polynomial.legendre.leggauss(order)
     t, w = 0.5 * (t + 1.0), 0.5 * w
     d_theta = 2.0 * np.pi / angles
     out = np.zeros((len(rho), 3))
-    for j in range(len(rho) - 1):
+    for j in range(0 if first_cell else 1, len(rho) - 1):
         r = rho[j] + (rho[j + 1] - rho[j]) * t
         f = rd(r) * (r * w * (rho[j + 1] - rho[j]))[:, None]
         out[j] += d_theta * np.sum(f * (1.0 - t)[:, None], axis=0)

@@ -52,7 +52,8 @@ TRANSLUCENT_PROGRAM = ProgramSpec(
     "translucent",
     vertex="reflets/techniques/shaders/mesh.vert",
     fragment=_SHADERS + "translucent.frag",
-    flags=frozenset({"LIGHT_DIRECTIONAL", "PROFILE", "SS_NODES", "RINGS", "ANGLES", "TERMS", "OUTPUT"}) | LIGHT_FLAGS,
+    flags=frozenset({"LIGHT_DIRECTIONAL", "PROFILE", "SS_NODES", "RINGS", "ANGLES", "TERMS", "MS_PRODUCT", "OUTPUT"})
+    | LIGHT_FLAGS,
 )
 TERM_BITS = {"specular": 1, "single": 2, "multiple": 4}
 
@@ -188,6 +189,7 @@ class Translucency(Forward):
             "RINGS": p.rings,
             "ANGLES": p.angles,
             "TERMS": self._terms(material),
+            "MS_PRODUCT": int(p.ms_quadrature == "product"),
         }
 
     def _terms(self, material: Translucent) -> int:
@@ -242,19 +244,16 @@ class Translucency(Forward):
         if p.ms_quadrature == "bilinear":
             weights = np.repeat(rings_module.ring_weights(radii_mm, p.angles)[:, None], 3, axis=1)
             inv_rd = np.ones_like(weights)
-            floor = 0.0
         else:
 
             def rd(r):
                 return profile_rd(material.profile, np.asarray(r)[..., None], medium)
 
-            floor = radii_mm[1] / 8.0
-            weights = rings_module.product_weights(radii_mm, p.angles, rd)
-            inv_rd = 1.0 / rd(np.maximum(radii_mm, floor))
+            weights = rings_module.product_weights(radii_mm, p.angles, rd, first_cell=False)
+            inv_rd = 1.0 / rd(np.maximum(radii_mm, 1e-9))
         return {
             "a_ring_weight": weights.astype(np.float32).tobytes(),
             "a_ring_inv_rd": inv_rd.astype(np.float32).tobytes(),
-            "a_rd_floor": float(floor),
         }
 
     def material_textures(self, material) -> dict[str, object]:

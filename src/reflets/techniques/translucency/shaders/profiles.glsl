@@ -1,4 +1,5 @@
-// Provides profile_rd(r): the diffusion profile R_d at distance r (mm), per RGB channel — twin of
+// Provides profile_rd(r): the diffusion profile R_d at distance r (mm), per RGB channel, and its cumulative
+// profile_cumulative(x) = ∫₀^x R_d(u) u du — twin of
 // reflets/translucency/profiles.py (constants p_* from profiles.glsl_uniforms). PROFILE: 0 dipole,
 // 1 better dipole, 2 normalised diffusion.
 #if PROFILE == 2
@@ -7,6 +8,11 @@ uniform vec3 p_s;
 vec3 profile_rd(float r) {
     r = max(r, 1e-6);
     return p_A * p_s * (exp(-p_s * r) + exp(-p_s * r / 3.0)) / (8.0 * PI * r);
+}
+
+// C(x) = ∫₀^x R_d(u) u du
+vec3 profile_cumulative(float x) {
+    return p_A / (8.0 * PI) * ((1.0 - exp(-p_s * x)) + 3.0 * (1.0 - exp(-p_s * x / 3.0)));
 }
 #else
 uniform vec3 p_zr;
@@ -21,5 +27,19 @@ vec3 profile_rd(float r) {
     vec3 real_source = (p_ce * p_zr * (p_str * dr + 1.0) / (dr * dr) + p_cphi_over_d) * exp(-p_str * dr) / dr;
     vec3 virtual_source = (p_ce * p_zv * (p_str * dv + 1.0) / (dv * dv) + p_cphi_over_d) * exp(-p_str * dv) / dv;
     return p_cn * (real_source - virtual_source);
+}
+
+// C(x) = ∫₀^x R_d(u) u du in closed form: with d² = u² + z², u du = d dd, and
+// ∫ z (σd + 1) e^{−σd}/d² dd = −z e^{−σd}/d,  ∫ e^{−σd} dd = −e^{−σd}/σ.
+vec3 dipole_source_cumulative(vec3 z, float x) {
+    vec3 d = sqrt(x * x + z * z);
+    vec3 az = abs(z);
+    vec3 flux = p_ce * z * (exp(-p_str * az) / az - exp(-p_str * d) / d);
+    vec3 fluence = p_cphi_over_d * (exp(-p_str * az) - exp(-p_str * d)) / max(p_str, vec3(1e-12));
+    return flux + fluence;
+}
+
+vec3 profile_cumulative(float x) {
+    return p_cn * (dipole_source_cumulative(p_zr, x) - dipole_source_cumulative(p_zv, x));
 }
 #endif

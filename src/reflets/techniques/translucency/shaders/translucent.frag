@@ -3,7 +3,7 @@
 // scattering by a ray march along the refracted view ray, and multiple scattering by the ring integral of the
 // diffusion profile over the light view (reflets/techniques/translucency/technique.py explains each term).
 // Flags: LIGHT_DIRECTIONAL, PROFILE, SS_NODES (k_max + 1), RINGS, ANGLES, TERMS (bit 1 specular, 2 single,
-// 4 multiple).
+// 4 multiple), MS_PRODUCT (1: product integration, 0: the document's bilinear cells).
 #include BRDF
 #include "reflets/techniques/translucency/shaders/profiles.glsl"
 
@@ -28,9 +28,9 @@ uniform vec3 a_diffuse_norm;         // 1 / (π (1 − 2 C1_out))
 uniform float a_ss_depth[SS_NODES];  // march depths in mean free paths 1/σ_t
 uniform float a_ss_weight[SS_NODES]; // their quadrature weights (same units)
 uniform float a_ring_radius[RINGS + 1];  // scene units
-uniform vec3 a_ring_weight[RINGS + 1];   // per node of ring j (mm², × the profile for "product"), centre: ANGLES copies
-uniform vec3 a_ring_inv_rd[RINGS + 1];   // "product": 1 / R_d(max(ρ_j, floor)); "bilinear": 1
-uniform float a_rd_floor;                // mm ("product": the distance below which R_d is held constant)
+uniform vec3 a_ring_weight[RINGS + 1];   // per node of ring j (bilinear: mm², the centre counting ANGLES
+                                         // copies; product: ∫ R_d ρ hat_j dρ dθ over ρ > ρ₁)
+uniform vec3 a_ring_inv_rd[RINGS + 1];   // product: 1 / R_d(ρ_j)
 
 out vec4 f_color;
 
@@ -122,28 +122,56 @@ vec3 single_scattering(vec3 x, vec3 n, vec3 wo) {
     return sum * (1.0 - fresnel_dielectric(dot(n, wo), m_eta)) / (m_eta * m_eta);
 }
 
-// One ring node: the flux density entering the surface point the light sees there × R_d at the true distance
-// ("product": relative to the profile at the node's plane distance, which the weights already integrate).
-vec3 ring_node(vec3 x, vec3 p, int j) {
+// One ring node: the flux density entering the surface point the light sees there (returned), and the true
+// distance r (mm) from x to that point.
+vec3 ring_node(vec3 x, vec3 p, out float r) {
     vec3 xi, ni, beam, travel;
     float cos_ratio;
+    r = 0.0;
     if (!light_lookup(p, xi, ni) || !entering(xi, ni, beam, travel, cos_ratio)) return vec3(0.0);
-    return profile_rd(max(length(xi - x) * a_mm_per_unit, a_rd_floor)) * a_ring_inv_rd[j] * beam;
+    r = length(xi - x) * a_mm_per_unit;
+    return beam;
 }
 
 vec3 multiple_scattering(vec3 x, vec3 n, vec3 wo) {
     vec3 wl = to_light(x);
     mat3 basis = shading_frame(wl, vec4(0.0));  // columns: two axes of the plane orthogonal to the light, wl
-    vec3 sum = ring_node(x, x, 0) * a_ring_weight[0] * float(ANGLES);
+    vec3 sum = vec3(0.0);
+    float rho1 = a_ring_radius[1] * a_mm_per_unit;  // mm
+    vec3 first_cell = vec3(0.0);                     // product rule: Σ_a ∫₀^ρ₁ R_d(k_a ρ) ρ dρ
     for (int j = 1; j <= RINGS; ++j) {
         vec3 ring = vec3(0.0);
         for (int a = 0; a < ANGLES; ++a) {
             float theta = TWO_PI * float(a) / float(ANGLES);
             vec3 p = x + a_ring_radius[j] * (cos(theta) * basis[0] + sin(theta) * basis[1]);
-            ring += ring_node(x, p, j);
+            float r;
+            vec3 beam = ring_node(x, p, r);
+#if MS_PRODUCT
+            // R_d at the true distance relative to the plane distance's, which the weights integrate
+            ring += beam * profile_rd(r) * a_ring_inv_rd[j];
+            if (j == 1) {
+                // how the surface stretches distances in this direction (k ≥ 1 on a plane: r² = ρ² + depth²)
+                float k = max(r / rho1, 1.0);
+                first_cell += profile_cumulative(k * rho1) / (k * k);
+            }
+#else
+            ring += beam * profile_rd(r);
+#endif
         }
         sum += a_ring_weight[j] * ring;
     }
+    float r_c;
+    vec3 beam_c = ring_node(x, x, r_c);
+#if MS_PRODUCT
+    // The first cell (ρ < ρ₁) holds most of a sharp profile's energy (normalised diffusion is singular at 0): it
+    // is integrated exactly per direction for a locally planar surface, ∫₀^ρ₁ R_d(kρ) ρ dρ = C(kρ₁)/k²
+    // (C the profile's cumulative), with the light of the centre. Where the light enters far from x (the
+    // light does not see x: back-lit thin parts), R_d is nearly constant over the cell: R_d(r_c) × its area.
+    float d_theta = TWO_PI / float(ANGLES);
+    sum += beam_c * (r_c < 0.5 * rho1 ? d_theta * first_cell : profile_rd(r_c) * (PI * rho1 * rho1));
+#else
+    sum += beam_c * profile_rd(r_c) * a_ring_weight[0] * float(ANGLES);
+#endif
     return sum * a_diffuse_norm * (1.0 - fresnel_dielectric(dot(n, wo), m_eta));
 }
 
