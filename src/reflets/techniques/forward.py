@@ -155,15 +155,7 @@ class Forward(Technique):
             material = scene.materials[mesh.material]
             spec = self.program_for(material)
             program = get_program(ctx, spec, slots=self.slots(material), **self.flags(material))
-            vbo = ctx.buffer(data.interleaved().tobytes())
-            ibo = ctx.buffer(data.indices.tobytes())
-            vao = ctx.vertex_array(
-                program,
-                [(vbo, "3f 3f 4f 2f", "in_position", "in_normal", "in_tangent", "in_uv")],
-                ibo,
-                skip_errors=True,
-            )
-            self._objects += [vbo, ibo, vao]
+            vao = self.mesh_vertex_array(program, data)
             uniforms = {**material.uniforms(), **self.material_uniforms(material)}
             textures = {**material.textures(ctx), **self.material_textures(material)}
             self._draws.append((program, vao, uniforms, textures))
@@ -241,6 +233,19 @@ class Forward(Technique):
         """(frames to accumulate, supersampling side s) for a requested spp; deterministic techniques
         anti-alias with s×s samples."""
         return 1, samples_per_pixel_side(spp)
+
+    def mesh_vertex_array(self, program, data):
+        """A vertex array of one mesh for a program of mesh.vert's layout (buffers owned by this technique)."""
+        vbo = self.ctx.buffer(data.interleaved().tobytes())
+        ibo = self.ctx.buffer(data.indices.tobytes())
+        vao = self.ctx.vertex_array(
+            program,
+            [(vbo, "3f 3f 4f 2f", "in_position", "in_normal", "in_tangent", "in_uv")],
+            ibo,
+            skip_errors=True,
+        )
+        self._objects += [vbo, ibo, vao]
+        return vao
 
     def _ssbo(self, rows: list[tuple]):
         data = np.asarray(rows, dtype=np.float32).reshape(-1, 4) if rows else np.zeros((1, 4), np.float32)

@@ -119,18 +119,7 @@ class Translucency(Forward):
         self._lv_fbo = ctx.framebuffer(color_attachments=[position, normal], depth_attachment=self._lv_depth)
         self._objects += [self._lv_depth, self._lv_fbo]
         program = get_program(ctx, LIGHT_VIEW_PROGRAM)
-        self._lv_vaos = []
-        for data in meshes:
-            vbo = ctx.buffer(data.interleaved().tobytes())
-            ibo = ctx.buffer(data.indices.tobytes())
-            vao = ctx.vertex_array(
-                program,
-                [(vbo, "3f 3f 4f 2f", "in_position", "in_normal", "in_tangent", "in_uv")],
-                ibo,
-                skip_errors=True,
-            )
-            self._objects += [vbo, ibo, vao]
-            self._lv_vaos.append(vao)
+        self._lv_vaos = [self.mesh_vertex_array(program, data) for data in meshes]
 
     def _light_view_textures(self):
         """The light-view position and normal maps (created once per prepare, nearest filtering)."""
