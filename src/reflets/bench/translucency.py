@@ -145,33 +145,74 @@ def _costs(scene, size, frames: int, settings) -> list[dict]:
     return rows
 
 
-def _bunny_errors(size, spp: int, out_dir: Path) -> dict:
-    """Image error of each profile (default settings) against volumetric path tracing, index-matched bunny."""
-    import reflets
+def _bunny_errors(size, spp: int, settings, out_dir: Path, frames: int) -> dict:
+    """Error against volumetric path tracing, and frame time, of every profile at every Fig 7.2 setting on the
+    index-matched bunny (η = 1: what the volumetric reference can render)."""
 
+    from ..gpu import get_context
     from ..imageio import write_image
     from ..metrics import flip
     from ..reference.volumetric import render_volumetric
+    from ..techniques import get_technique
 
     ref = render_volumetric(_object_scene("bunny.ply", "skin1", 100.0, size, eta=1.0), spp=spp, seed=7)
     m = ref.mask
     noise = float(np.mean(ref.stderr[m] ** 2) / np.mean(ref.image[m] ** 2))
     write_image(out_dir / "translucency_bunny_reference.png", ref.image)
+    ctx = get_context()
     rows = []
     for profile in ("dipole", "better_dipole", "normalized_diffusion"):
-        image = reflets.render(
-            _object_scene("bunny.ply", "skin1", 100.0, size, eta=1.0, profile=profile), method="translucent"
-        )
-        write_image(out_dir / f"translucency_bunny_{profile}.png", image)
-        rows.append(
-            {
-                "profile": profile,
-                "relmse": float(np.mean((image[m] - ref.image[m]) ** 2) / np.mean(ref.image[m] ** 2)),
-                "mean_ratio": (image[m].mean(axis=0) / ref.image[m].mean(axis=0)).tolist(),
-                "flip": flip(image, ref.image),
-            }
-        )
+        scene = _object_scene("bunny.ply", "skin1", 100.0, size, eta=1.0, profile=profile)
+        for label, rings, angles, radius in [("default", 12, 14, None), *settings]:
+            technique = get_technique("translucent")(ctx, rings=rings, angles=angles, radius_mfp=radius)
+            technique.prepare(scene)
+            image = technique.render(size=size)
+            technique.timer.wall_ms.clear()
+            technique.timer.gpu_ms.clear()
+            for _ in range(frames):
+                technique.render(size=size)
+            ms = statistics.median(technique.timer.gpu_ms or technique.timer.wall_ms)
+            technique.release()
+            if label == "default":
+                write_image(out_dir / f"translucency_bunny_{profile}.png", image)
+            rows.append(
+                {
+                    "profile": profile,
+                    "setting": label if radius is not None else "default (168, capture radius)",
+                    "samples": rings * angles,
+                    "frame_ms": ms,
+                    "relmse": float(np.mean((image[m] - ref.image[m]) ** 2) / np.mean(ref.image[m] ** 2)),
+                    "mean_ratio": (image[m].mean(axis=0) / ref.image[m].mean(axis=0)).tolist(),
+                    "flip": flip(image, ref.image),
+                }
+            )
+    plot_error_time(rows, out_dir / "translucency_error_time.png", noise)
     return {"size": list(size), "spp": spp, "reference_noise_relmse": noise, "rows": rows}
+
+
+def plot_error_time(rows: list[dict], path: Path, noise: float) -> None:
+    """Relative MSE against frame time, one curve per profile through the sampling settings."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    for profile in dict.fromkeys(r["profile"] for r in rows):
+        pts = sorted((r["frame_ms"], r["relmse"], r["setting"]) for r in rows if r["profile"] == profile)
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=profile.replace("_", " "))
+        for t, e, label in pts:
+            ax.annotate(label.split(" (")[0], (t, e), fontsize=6, xytext=(3, 3), textcoords="offset points")
+    ax.axhline(noise, color="grey", ls="--", lw=0.8, label="reference noise")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("ms per frame")
+    ax.set_ylabel("relative MSE vs volumetric path tracing")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 @register_suite("translucency")
@@ -187,7 +228,7 @@ def bench_translucency(quick: bool, out_dir: Path) -> tuple[dict, str]:
         name: _costs(_object_scene(mesh, preset, mm, size), size, 2 if quick else 3, settings)
         for name, (mesh, preset, mm) in (list(OBJECTS.items())[:1] if quick else OBJECTS.items())
     }
-    errors = _bunny_errors((128, 96) if quick else (384, 288), 16 if quick else 48, out_dir)
+    errors = _bunny_errors((128, 96) if quick else (384, 288), 16 if quick else 48, settings, out_dir, 2)
     results = {
         "photons": photons,
         "slab": slab,
@@ -259,18 +300,23 @@ def _markdown(r: dict) -> str:
     e = r["bunny_error"]
     lines += [
         "",
-        f"## Image error: bunny at 100 mm, skin1, index-matched (η = 1), {e['size'][0]}×{e['size'][1]}",
+        f"## Error vs time: bunny at 100 mm, skin1, index-matched (η = 1), {e['size'][0]}×{e['size'][1]}",
         "",
         f"Against volumetric path tracing ({e['spp']} spp; its own noise: relative MSE "
-        f"{e['reference_noise_relmse']:.2%}). Default settings (12 rings × 14 angles, capture radius, k_max = 30).",
+        f"{e['reference_noise_relmse']:.2%}, included in every error below). Frame time at the same size.",
         "",
-        "| profile | relative MSE over the object | mean ratio R, G, B | FLIP |",
-        "|---|---|---|---|",
+        "| profile | setting | samples | ms / frame | relative MSE | mean ratio R, G, B | FLIP |",
+        "|---|---|---|---|---|---|---|",
     ]
     for row in e["rows"]:
         ratio = ", ".join(f"{v:.3f}" for v in row["mean_ratio"])
-        lines.append(f"| {row['profile']} | {row['relmse']:.2%} | {ratio} | {row['flip']:.3f} |")
+        lines.append(
+            f"| {row['profile']} | {row['setting']} | {row['samples']} | {row['frame_ms']:.0f} | "
+            f"{row['relmse']:.2%} | {ratio} | {row['flip']:.3f} |"
+        )
     lines += [
+        "",
+        "![error vs time](translucency_error_time.png)",
         "",
         "![reference](translucency_bunny_reference.png) ![better dipole](translucency_bunny_better_dipole.png)",
         "",
