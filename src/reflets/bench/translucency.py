@@ -96,7 +96,7 @@ def _object_scene(mesh: str, preset: str, mm_per_unit: float, size, eta=None, pr
     material.update({"profile": profile} if eta is None else {"profile": profile, "eta": eta})
     return reflets.load_dict(
         {
-            "camera": {"position": [0.2, 0.55, 1.25], "look_at": [0, 0.42, 0], "fov_y": 35, "size": list(size)},
+            "camera": {"position": [0.3, 0.65, 2.4], "look_at": [0, 0.45, 0], "fov_y": 35, "size": list(size)},
             "materials": {"m": material},
             "mesh": [{"file": path, "material": "m"}],
             "light": [{"type": "point", "position": [-1.2, 2.0, 2.0], "intensity": [12, 12, 12]}],
