@@ -133,12 +133,22 @@ vec3 ring_node(vec3 x, vec3 p, out float r) {
     return beam;
 }
 
+const float GAUSS3_T[3] = float[3](0.1127016654, 0.5, 0.8872983346);  // Gauss-Legendre on [0, 1]
+const float GAUSS3_W[3] = float[3](0.2777777778, 0.4444444444, 0.2777777778);
+
 vec3 multiple_scattering(vec3 x, vec3 n, vec3 wo) {
     vec3 wl = to_light(x);
     mat3 basis = shading_frame(wl, vec4(0.0));  // columns: two axes of the plane orthogonal to the light, wl
     vec3 sum = vec3(0.0);
     float rho1 = a_ring_radius[1] * a_mm_per_unit;  // mm
-    vec3 first_cell = vec3(0.0);                     // product rule: Σ_a ∫₀^ρ₁ R_d(k_a ρ) ρ dρ
+    // The centre: where the light enters along its line through x, r_c measured along that line (0 where the
+    // light sees x — |xi − x| would add the light map's lateral quantisation, which a sharp profile feels).
+    float r_c;
+    vec3 beam_c = ring_node(x, x, r_c);
+    vec3 xi_c, ni_c;
+    if (light_lookup(x, xi_c, ni_c)) r_c = light_distance(x, xi_c) * a_mm_per_unit;
+    if (r_c < u_shadow_bias * a_mm_per_unit) r_c = 0.0;  // within the map's quantisation: the light sees x
+    vec3 first_cell = vec3(0.0);                     // product rule: Σ_a ∫₀^ρ₁ R_d(r_a(ρ)) ρ dρ
     for (int j = 1; j <= RINGS; ++j) {
         vec3 ring = vec3(0.0);
         for (int a = 0; a < ANGLES; ++a) {
@@ -150,9 +160,23 @@ vec3 multiple_scattering(vec3 x, vec3 n, vec3 wo) {
             // R_d at the true distance relative to the plane distance's, which the weights integrate
             ring += beam * profile_rd(r) * a_ring_inv_rd[j];
             if (j == 1) {
-                // how the surface stretches distances in this direction (k ≥ 1 on a plane: r² = ρ² + depth²)
-                float k = max(r / rho1, 1.0);
-                first_cell += profile_cumulative(k * rho1) / (k * k);
+                // Inside the first ring the true distance is modelled as r(ρ)² = r_c² + k² ρ², k fitted to this
+                // direction's node (k ≥ 1: true distances are never shorter than the plane's), and the light
+                // varies linearly from the centre's to the node's (none beyond a silhouette). The integral
+                // ∫₀^ρ₁ R_d(r(ρ)) ρ dρ = (C(r(ρ₁)) − C(r_c)) / k² is exact (C the profile's cumulative); how it
+                // splits between the centre's and the node's light comes from a 3-point Gauss rule.
+                float r1 = r > 0.0 ? r : sqrt(r_c * r_c + rho1 * rho1);  // node unlit: assume k = 1
+                float k2 = max((r1 * r1 - r_c * r_c) / (rho1 * rho1), 1.0);
+                vec3 total = (profile_cumulative(sqrt(r_c * r_c + k2 * rho1 * rho1)) - profile_cumulative(r_c)) / k2;
+                vec3 inner = vec3(0.0), outer = vec3(0.0);
+                for (int g = 0; g < 3; ++g) {
+                    float t = GAUSS3_T[g];
+                    vec3 f = GAUSS3_W[g] * t * profile_rd(sqrt(r_c * r_c + k2 * t * t * rho1 * rho1));
+                    inner += f * (1.0 - t);
+                    outer += f * t;
+                }
+                vec3 share = outer / max(inner + outer, vec3(1e-30));
+                first_cell += total * ((1.0 - share) * beam_c + share * beam);
             }
 #else
             ring += beam * profile_rd(r);
@@ -160,15 +184,10 @@ vec3 multiple_scattering(vec3 x, vec3 n, vec3 wo) {
         }
         sum += a_ring_weight[j] * ring;
     }
-    float r_c;
-    vec3 beam_c = ring_node(x, x, r_c);
 #if MS_PRODUCT
-    // The first cell (ρ < ρ₁) holds most of a sharp profile's energy (normalised diffusion is singular at 0): it
-    // is integrated exactly per direction for a locally planar surface, ∫₀^ρ₁ R_d(kρ) ρ dρ = C(kρ₁)/k²
-    // (C the profile's cumulative), with the light of the centre. Where the light enters far from x (the
-    // light does not see x: back-lit thin parts), R_d is nearly constant over the cell: R_d(r_c) × its area.
-    float d_theta = TWO_PI / float(ANGLES);
-    sum += beam_c * (r_c < 0.5 * rho1 ? d_theta * first_cell : profile_rd(r_c) * (PI * rho1 * rho1));
+    // The first cell (ρ < ρ₁) holds most of a sharp profile's energy (normalised diffusion is singular at 0):
+    // integrated per direction above.
+    sum += (TWO_PI / float(ANGLES)) * first_cell;
 #else
     sum += beam_c * profile_rd(r_c) * a_ring_weight[0] * float(ANGLES);
 #endif
