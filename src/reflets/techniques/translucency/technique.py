@@ -14,7 +14,9 @@ Passes per frame:
    - **multiple scattering**: R_d (dipole, better dipole or normalised diffusion) integrated over ``rings`` ×
      ``angles`` nodes in the plane through the point orthogonal to the light, radii r_max f_β(j/K) (β fitted
      per material), each node's value R_d(true distance to the surface point the light sees) × transmitted
-     flux density, summed with the exact weights of the bilinear cell integral (rings.py), then × F_T(ω_o)/(πc).
+     flux density, summed with the exact weights of the document's bilinear cell integral (``ms_quadrature =
+     "bilinear"``) or, by default, of product integration (R_d integrated exactly per ring, the first ring's
+     disc in closed form per direction; rings.py, translucent.frag), then × F_T(ω_o)/(πc).
      On a plane orthogonal to the light, cell area × irradiance normal to the beam is the incident flux (no
      extra n·ω_l, as the note corrects).
 
