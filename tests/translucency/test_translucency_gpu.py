@@ -124,3 +124,10 @@ def test_cli_terms_and_lighting_errors(tmp_path, capsys):
     code = main(["render", str(scenes("04_bunny_arealight.toml")), "--method", "translucent", "-o", str(out)])
     err = capsys.readouterr().err
     assert code == 2 and "exactly one point or directional light" in err and "Traceback" not in err
+
+
+def test_geometry_outputs_match_the_forward_pass():
+    scene = slab({"preset": "skin1"}, OVERHEAD)
+    for output in ("position", "normal", "uv"):
+        ours = reflets.render(scene, method="translucent", output=output)
+        np.testing.assert_allclose(ours, reflets.render(scene, method=output), atol=1e-6)

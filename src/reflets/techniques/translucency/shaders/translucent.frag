@@ -216,5 +216,12 @@ void main() {
 #if (TERMS & 4) != 0
     color += multiple_scattering(x, n, wo);
 #endif
+#if OUTPUT == 1
+    color = x;  // the geometry AOVs, as forward.frag writes them
+#elif OUTPUT == 2
+    color = n;
+#elif OUTPUT == 3
+    color = vec3(v_uv, 0.0);
+#endif
     f_color = vec4(color, 1.0);
 }
