@@ -131,3 +131,16 @@ def test_geometry_outputs_match_the_forward_pass():
     for output in ("position", "normal", "uv"):
         ours = reflets.render(scene, method="translucent", output=output)
         np.testing.assert_allclose(ours, reflets.render(scene, method=output), atol=1e-6)
+
+
+@pytest.mark.parametrize("direction", [[0, -1, 0], [0.6, -0.8, 0]])
+def test_camera_view_blend_keeps_the_slab_energy(direction):
+    """The document's light-/camera-view blend (λ → 0: half each): the camera view's estimate of the same slab
+    agrees (wide camera so that the profile's support is on screen; index-matched)."""
+    light = {"type": "directional", "direction": direction, "irradiance": [1, 1, 1]}
+    scene = slab({"preset": "skin1", "eta": 1.0}, light, size=(64, 64), fov=100)
+    blended = reflets.render(scene, method="translucent", terms=["multiple"], view_blend=0.001)
+    expected = -direction[1] * total_reflectance("better_dipole", scene.materials["m"].medium()) / np.pi
+    np.testing.assert_allclose(blended[30:34, 30:34].mean(axis=(0, 1)), expected, rtol=0.05)
+    light_only = reflets.render(scene, method="translucent", terms=["multiple"])
+    assert np.abs(blended - light_only).max() > 1e-4  # the camera view did contribute

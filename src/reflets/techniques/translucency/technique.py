@@ -20,8 +20,12 @@ Passes per frame:
      On a plane orthogonal to the light, cell area × irradiance normal to the beam is the incident flux (no
      extra n·ω_l, as the note corrects).
 
-Not (yet) done here: the document's curvature rejection and light-/camera-view blend, image-space refraction
-through the object, more than one light for the subsurface terms. Distances: coefficients are per mm, scene
+   - optionally (``view_blend = λ``) the document's light-/camera-view blend: the same integral over the
+     camera's own position/normal maps, weighted by s = 1/(1 + e^{−λ((n·ω_l) − (n·ω_o))}) against the light
+     view's.
+
+Not (yet) done here: the document's curvature rejection, image-space refraction through the object, more than
+one light for the subsurface terms. Distances: coefficients are per mm, scene
 positions × ``mm_per_unit``.
 """
 
@@ -54,7 +58,9 @@ TRANSLUCENT_PROGRAM = ProgramSpec(
     "translucent",
     vertex="reflets/techniques/shaders/mesh.vert",
     fragment=_SHADERS + "translucent.frag",
-    flags=frozenset({"LIGHT_DIRECTIONAL", "PROFILE", "SS_NODES", "RINGS", "ANGLES", "TERMS", "MS_PRODUCT", "OUTPUT"})
+    flags=frozenset(
+        {"LIGHT_DIRECTIONAL", "PROFILE", "SS_NODES", "RINGS", "ANGLES", "TERMS", "MS_PRODUCT", "VIEW_BLEND", "OUTPUT"}
+    )
     | LIGHT_FLAGS,
 )
 TERM_BITS = {"specular": 1, "single": 2, "multiple": 4}
@@ -81,6 +87,13 @@ class TranslucencyParams(ForwardParams):
         "product",
         description="multiple scattering: bilinear cells (the document) or product integration (R_d integrated "
         "exactly per ring, the light interpolated)",
+    )
+    view_blend: float | None = Field(
+        None,
+        gt=0,
+        le=100,
+        description="λ of the document's light-/camera-view blend of the multiple scattering (None: light view "
+        "only); the camera view's own position/normal maps serve where the light grazes the surface",
     )
     terms: tuple[Literal["specular", "single", "multiple"], ...] = Field(
         ("specular", "single", "multiple"), description="which terms to render (breakdowns, tests)"
@@ -111,6 +124,7 @@ class Translucency(Forward):
             )
         self._light = lights[0]
         self._light_maps = None
+        self._camera_map_textures = None
         meshes = [mesh_data(scene, i) for i in range(len(scene.mesh))]
         points = np.concatenate([m.positions for m in meshes]) if meshes else np.zeros((1, 3))
         self._light_view_proj, self._shadow_bias = self._light_camera(points)
@@ -181,6 +195,7 @@ class Translucency(Forward):
             "ANGLES": p.angles,
             "TERMS": self._terms(material),
             "MS_PRODUCT": int(p.ms_quadrature == "product"),
+            "VIEW_BLEND": int(p.view_blend is not None),
         }
 
     def _terms(self, material: Translucent) -> int:
@@ -228,6 +243,7 @@ class Translucency(Forward):
             "u_light_vector": tuple(float(v) for v in light_vector),
             "u_light_power": tuple(float(v) for v in power),
             "u_shadow_bias": float(self._shadow_bias),
+            "a_blend_lambda": float(p.view_blend or 0.0),
         }
 
     def _ring_uniforms(self, material, medium, radii_mm: np.ndarray) -> dict[str, object]:
@@ -251,7 +267,31 @@ class Translucency(Forward):
         if not isinstance(material, Translucent):
             return {}
         position, normal = self._light_view_textures()
-        return {"u_light_position": position, "u_light_normal": normal}
+        textures = {"u_light_position": position, "u_light_normal": normal}
+        if self.params.view_blend is not None:
+            cam_position, cam_normal = self._camera_maps(tuple(self.scene.camera.size))
+            textures.update({"u_camera_position": cam_position, "u_camera_normal": cam_normal})
+        return textures
+
+    def _camera_maps(self, size: tuple[int, int]):
+        """The camera view's position and normal maps at a render size (re-created when the size changes;
+        the draws' texture tables are updated in place)."""
+        maps = self.__dict__.get("_camera_map_textures")
+        if maps is not None and maps[0].size == size:
+            return maps
+        new = tuple(self.ctx.texture(size, 4, dtype="f4") for _ in range(2))
+        for tex in new:
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            tex.repeat_x = tex.repeat_y = False
+        depth = self.ctx.depth_texture(size)
+        fbo = self.ctx.framebuffer(color_attachments=list(new), depth_attachment=depth)
+        self._objects += [*new, depth, fbo]
+        for _, _, _, textures in getattr(self, "_draws", []):
+            if "u_camera_position" in textures:
+                textures.update({"u_camera_position": new[0], "u_camera_normal": new[1]})
+        self._camera_map_textures = new
+        self._camera_map_fbo = fbo
+        return new
 
     # ------------------------------------------------------------------ frame
     def _draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
@@ -265,5 +305,13 @@ class Translucency(Forward):
         set_uniforms(program, {"u_view_proj": self._light_view_proj.T.astype(np.float32).tobytes()})
         for vao in self._lv_vaos:
             vao.render()
+        if self.params.view_blend is not None:  # the camera's own maps, same program
+            self._camera_maps(target.size)
+            self._camera_map_fbo.use()
+            ctx.viewport = (0, 0, *target.size)
+            self._camera_map_fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+            set_uniforms(program, {"u_view_proj": vp_bytes})
+            for vao in self._lv_vaos:
+                vao.render()
         ctx.disable(ctx.DEPTH_TEST)
         super()._draw(target, view_proj, vp_bytes, frame, seed)

@@ -3,7 +3,8 @@
 // scattering by a ray march along the refracted view ray, and multiple scattering by the ring integral of the
 // diffusion profile over the light view (reflets/techniques/translucency/technique.py explains each term).
 // Flags: LIGHT_DIRECTIONAL, PROFILE, SS_NODES (k_max + 1), RINGS, ANGLES, TERMS (bit 1 specular, 2 single,
-// 4 multiple), MS_PRODUCT (1: product integration, 0: the document's bilinear cells).
+// 4 multiple), MS_PRODUCT (1: product integration, 0: the document's bilinear cells), VIEW_BLEND (the
+// document's light-/camera-view blend).
 #include BRDF
 #include "reflets/techniques/translucency/shaders/profiles.glsl"
 
@@ -122,12 +123,46 @@ vec3 single_scattering(vec3 x, vec3 n, vec3 wo) {
     return sum * (1.0 - fresnel_dielectric(dot(n, wo), m_eta)) / (m_eta * m_eta);
 }
 
-// One ring node: the flux density entering the surface point the light sees there (returned), and the true
-// distance r (mm) from x to that point.
-vec3 ring_node(vec3 x, vec3 p, out float r) {
+#if VIEW_BLEND
+uniform mat4 u_view_proj;            // the camera's (shared with the vertex stage)
+uniform sampler2D u_camera_position; // the camera's own position / normal maps (w = 1 where a surface is seen)
+uniform sampler2D u_camera_normal;
+uniform float a_blend_lambda;
+
+bool camera_lookup(vec3 p, out vec3 xc, out vec3 nc) {
+    vec4 clip = u_view_proj * vec4(p, 1.0);
+    xc = vec3(0.0);
+    nc = vec3(0.0, 0.0, 1.0);
+    if (clip.w <= 0.0) return false;
+    vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return false;
+    vec4 a = textureLod(u_camera_position, uv, 0.0);
+    xc = a.xyz;
+    nc = textureLod(u_camera_normal, uv, 0.0).xyz;
+    return a.w > 0.5;
+}
+#endif
+
+// One ring node of the light view (view 0): the flux density entering the surface point the light sees
+// through p, per unit area of the plane orthogonal to the light. Of the camera view (view 1, the document's
+// blend): the surface point the camera sees through p, its flux density per unit area of the plane
+// orthogonal to the view (lit if the light map holds that point: E F_T cosθ_l / cosθ_o). r: true distance
+// (mm) from x.
+vec3 ring_node(int view, vec3 x, vec3 p, out float r) {
     vec3 xi, ni, beam, travel;
     float cos_ratio;
     r = 0.0;
+#if VIEW_BLEND
+    if (view == 1) {
+        vec3 xc, nc, xl, nl;
+        if (!camera_lookup(p, xc, nc) || !light_lookup(xc, xl, nl) || length(xl - xc) > u_shadow_bias) return vec3(0.0);
+        if (!entering(xc, nc, beam, travel, cos_ratio)) return vec3(0.0);
+        r = length(xc - x) * a_mm_per_unit;
+        float cos_l = dot(nc, to_light(xc));
+        float cos_o = max(dot(nc, normalize(u_eye - xc)), 0.05);
+        return beam * cos_l / cos_o;
+    }
+#endif
     if (!light_lookup(p, xi, ni) || !entering(xi, ni, beam, travel, cos_ratio)) return vec3(0.0);
     r = length(xi - x) * a_mm_per_unit;
     return beam;
@@ -136,18 +171,19 @@ vec3 ring_node(vec3 x, vec3 p, out float r) {
 const float GAUSS3_T[3] = float[3](0.1127016654, 0.5, 0.8872983346);  // Gauss-Legendre on [0, 1]
 const float GAUSS3_W[3] = float[3](0.2777777778, 0.4444444444, 0.2777777778);
 
-vec3 multiple_scattering(vec3 x, vec3 n, vec3 wo) {
-    vec3 wl = to_light(x);
-    mat3 basis = shading_frame(wl, vec4(0.0));  // columns: two axes of the plane orthogonal to the light, wl
+// The profile integrated around x over the light view (view 0) or the camera view (view 1).
+vec3 profile_integral(int view, vec3 x, vec3 wo) {
+    vec3 axis = view == 0 ? to_light(x) : wo;
+    mat3 basis = shading_frame(axis, vec4(0.0));  // columns: two axes of the plane orthogonal to the view
     vec3 sum = vec3(0.0);
     float rho1 = a_ring_radius[1] * a_mm_per_unit;  // mm
     // The centre: where the light enters along its line through x, r_c measured along that line (0 where the
     // light sees x — |xi − x| would add the light map's lateral quantisation, which a sharp profile feels).
     float r_c;
-    vec3 beam_c = ring_node(x, x, r_c);
+    vec3 beam_c = ring_node(view, x, x, r_c);
     vec3 xi_c, ni_c;
-    if (light_lookup(x, xi_c, ni_c)) r_c = light_distance(x, xi_c) * a_mm_per_unit;
-    if (r_c < u_shadow_bias * a_mm_per_unit) r_c = 0.0;  // within the map's quantisation: the light sees x
+    if (view == 0 && light_lookup(x, xi_c, ni_c)) r_c = light_distance(x, xi_c) * a_mm_per_unit;
+    if (view == 1 || r_c < u_shadow_bias * a_mm_per_unit) r_c = 0.0;  // the view sees x itself
     vec3 first_cell = vec3(0.0);                     // product rule: Σ_a ∫₀^ρ₁ R_d(r_a(ρ)) ρ dρ
     for (int j = 1; j <= RINGS; ++j) {
         vec3 ring = vec3(0.0);
@@ -155,7 +191,7 @@ vec3 multiple_scattering(vec3 x, vec3 n, vec3 wo) {
             float theta = TWO_PI * float(a) / float(ANGLES);
             vec3 p = x + a_ring_radius[j] * (cos(theta) * basis[0] + sin(theta) * basis[1]);
             float r;
-            vec3 beam = ring_node(x, p, r);
+            vec3 beam = ring_node(view, x, p, r);
 #if MS_PRODUCT
             // R_d at the true distance relative to the plane distance's, which the weights integrate
             ring += beam * profile_rd(r) * a_ring_inv_rd[j];
@@ -190,6 +226,17 @@ vec3 multiple_scattering(vec3 x, vec3 n, vec3 wo) {
     sum += (TWO_PI / float(ANGLES)) * first_cell;
 #else
     sum += beam_c * profile_rd(r_c) * a_ring_weight[0] * float(ANGLES);
+#endif
+    return sum;
+}
+
+vec3 multiple_scattering(vec3 x, vec3 n, vec3 wo) {
+    vec3 sum = profile_integral(0, x, wo);
+#if VIEW_BLEND
+    // The document's blend: the light view where the light meets the surface squarely, the camera view where
+    // the camera does (s = 1/(1 + e^{−λ((n·ω_l) − (n·ω_o))})).
+    float s = 1.0 / (1.0 + exp(-a_blend_lambda * (dot(n, to_light(x)) - dot(n, wo))));
+    sum = s * sum + (1.0 - s) * profile_integral(1, x, wo);
 #endif
     return sum * a_diffuse_norm * (1.0 - fresnel_dielectric(dot(n, wo), m_eta));
 }
