@@ -218,6 +218,7 @@ def _compare_with_reference(result: DemoResult, reference, out_dir: Path) -> dic
 
 def _print_summary(results: list[DemoResult], info: dict, out_dir: Path) -> None:
     from rich.console import Console
+    from rich.markup import escape  # method labels such as brute[grid=8] are not markup
     from rich.table import Table
 
     table = Table(title=f"reflets demo — {info['renderer']}")
@@ -242,7 +243,7 @@ def _print_summary(results: list[DemoResult], info: dict, out_dir: Path) -> None
         ref = r.reference or {}
         rel = f"{ref['relmse']:.2e}" if ref else "—"
         within = f"{100 * ref['within_3_stderr']:.1f} %" if ref else "—"
-        table.add_row(r.name, r.method, r.size, f"{r.prepare_ms:.0f}", f"{r.frame_ms:.1f}", err, rel, within)
+        table.add_row(r.name, escape(r.method), r.size, f"{r.prepare_ms:.0f}", f"{r.frame_ms:.1f}", err, rel, within)
     console = Console(width=max(190, Console().width))
     console.print(table)
     console.print(f"gallery: {out_dir / 'index.html'}")
