@@ -110,14 +110,10 @@ class Translucent(Material):
         return Medium(np.asarray(self.sigma_a, dtype=np.float64), sigma_s, self.g, float(self.eta))
 
     def total_reflectance(self) -> np.ndarray:
-        """R_total of the profile, per channel (cached: a quadrature per channel)."""
-        cache = self.__dict__.setdefault("_cache", {})
-        key = (self.profile, tuple(self.sigma_a), tuple(self.reduced_scattering), self.g, self.eta)
-        if key not in cache:
-            from ..translucency.profiles import total_reflectance
+        """R_total of the profile, per channel (cached by reflets.translucency.profiles)."""
+        from ..translucency.profiles import total_reflectance
 
-            cache[key] = total_reflectance(self.profile, self.medium())
-        return cache[key]
+        return total_reflectance(self.profile, self.medium())
 
     def _diffuse_norm(self) -> float:
         from ..translucency.optics import fresnel_moment

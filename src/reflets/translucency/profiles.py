@@ -18,6 +18,8 @@ with z_r = 1/σ'_t, z_v = −z_r − 2 z_b, z_b = 2AD, d = sqrt(r² + z²), σ_t
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy import integrate
 
@@ -75,10 +77,15 @@ def dipole_total_reflectance(medium: Medium) -> np.ndarray:
     return 0.5 * a * (1.0 + np.exp(-4.0 / 3.0 * A * s)) * np.exp(-s)
 
 
-def normalized_diffusion_rd(r, medium: Medium, albedo=None) -> np.ndarray:
-    """Christensen–Burley R(r); ``albedo`` = total diffuse reflectance A (default: the better dipole's)."""
-    A = total_reflectance("better_dipole", medium) if albedo is None else np.asarray(albedo, dtype=np.float64)
-    s = (1.85 - A + 7.0 * np.abs(A - 0.8) ** 3) * medium.sigma_t
+def normalized_diffusion_parameters(medium: Medium) -> tuple[np.ndarray, np.ndarray]:
+    """(A, s) of Christensen–Burley's profile: A the better dipole's total reflectance, s in 1/mm."""
+    A = total_reflectance("better_dipole", medium)
+    return A, (1.85 - A + 7.0 * np.abs(A - 0.8) ** 3) * medium.sigma_t
+
+
+def normalized_diffusion_rd(r, medium: Medium) -> np.ndarray:
+    """Christensen–Burley R(r) = A s (e^{−sr} + e^{−sr/3}) / (8π r)."""
+    A, s = normalized_diffusion_parameters(medium)
     r = np.maximum(np.asarray(r, dtype=np.float64), 1e-12)
     return A * s * (np.exp(-s * r) + np.exp(-s * r / 3.0)) / (8.0 * np.pi * r)
 
@@ -95,13 +102,21 @@ def profile_rd(profile: str, r, medium: Medium) -> np.ndarray:
 
 
 def total_reflectance(profile: str, medium: Medium) -> np.ndarray:
-    """∫₀^∞ 2πr R_d(r) dr per channel, by adaptive quadrature in u = log r (the profiles span decades)."""
-    sigma_a = np.atleast_1d(medium.sigma_a)
-    out = np.empty(sigma_a.shape)
-    for c in range(sigma_a.size):
-        m = Medium(np.atleast_1d(medium.sigma_a)[c], np.atleast_1d(medium.sigma_s)[c], medium.g, medium.eta)
+    """∫₀^∞ 2πr R_d(r) dr per channel, by adaptive quadrature in u = log r (the profiles span decades); cached
+    per medium, since normalised diffusion needs it inside every evaluation of its profile."""
+    a, s = np.atleast_1d(medium.sigma_a), np.atleast_1d(medium.sigma_s)
+    key = (profile, tuple(map(float, a)), tuple(map(float, s)), float(medium.g), float(medium.eta))
+    out = np.array(_total_reflectance(*key))
+    return out.reshape(np.shape(medium.sigma_a)) if np.ndim(medium.sigma_a) else out
+
+
+@functools.lru_cache(maxsize=256)
+def _total_reflectance(profile: str, sigma_a: tuple, sigma_s: tuple, g: float, eta: float) -> tuple:
+    out = []
+    for a, s in zip(sigma_a, sigma_s, strict=True):
+        m = Medium(np.float64(a), np.float64(s), g, eta)
         if profile == "normalized_diffusion":
-            out[c] = total_reflectance("better_dipole", m)[0]  # normalised by construction: ∫ = A
+            out.append(float(total_reflectance("better_dipole", m)[0]))  # normalised by construction: ∫ = A
             continue
         mfp = float(m.mean_free_path)
 
@@ -111,8 +126,8 @@ def total_reflectance(profile: str, medium: Medium) -> np.ndarray:
 
         lo, hi = np.log(1e-7 * mfp), np.log(1e5 * mfp)
         value, _ = integrate.quad(integrand, lo, hi, limit=400, epsabs=1e-12, epsrel=1e-10)
-        out[c] = value
-    return out.reshape(np.shape(medium.sigma_a)) if np.ndim(medium.sigma_a) else out
+        out.append(value)
+    return tuple(out)
 
 
 def glsl_uniforms(profile: str, medium: Medium) -> dict[str, tuple]:
@@ -122,8 +137,7 @@ def glsl_uniforms(profile: str, medium: Medium) -> dict[str, tuple]:
         return tuple(float(x) for x in np.broadcast_to(np.asarray(a, dtype=np.float64), (3,)))
 
     if profile == "normalized_diffusion":
-        A = total_reflectance("better_dipole", medium)
-        s = (1.85 - A + 7.0 * np.abs(A - 0.8) ** 3) * medium.sigma_t
+        A, s = normalized_diffusion_parameters(medium)
         return {"p_A": vec(A), "p_s": vec(s)}
     t = _dipole_terms(medium, better=profile == "better_dipole")
     return {

@@ -217,7 +217,6 @@ class Translucency(Forward):
                 return profile_rd(material.profile, np.asarray(r_mm)[..., None], medium) @ weights
 
             beta = rings_module.fit_beta(rd, r_max_mm)
-        self.fitted_beta = beta
         radii_mm = rings_module.ring_radii(r_max_mm, p.rings, beta)
         depths = march_depths(p.k_max, p.c_l)
         light = self._light

@@ -63,17 +63,22 @@ float light_distance(vec3 p, vec3 xi) {
 }
 
 // The first surface along the light ray through p: its position and normal (false if none).
-bool light_lookup(vec3 p, out vec3 xi, out vec3 ni) {
-    vec4 clip = u_light_view_proj * vec4(p, 1.0);
+// The surface a view's position / normal maps hold along its ray through p (false if none).
+bool map_lookup(mat4 view_proj, sampler2D positions, sampler2D normals, vec3 p, out vec3 xi, out vec3 ni) {
+    vec4 clip = view_proj * vec4(p, 1.0);
     xi = vec3(0.0);
     ni = vec3(0.0, 0.0, 1.0);
     if (clip.w <= 0.0) return false;
     vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return false;
-    vec4 a = textureLod(u_light_position, uv, 0.0);
+    vec4 a = textureLod(positions, uv, 0.0);
     xi = a.xyz;
-    ni = textureLod(u_light_normal, uv, 0.0).xyz;
+    ni = textureLod(normals, uv, 0.0).xyz;
     return a.w > 0.5;
+}
+
+bool light_lookup(vec3 p, out vec3 xi, out vec3 ni) {
+    return map_lookup(u_light_view_proj, u_light_position, u_light_normal, p, xi, ni);
 }
 
 float hg_phase(float cos_theta, float g) {
@@ -130,16 +135,7 @@ uniform sampler2D u_camera_normal;
 uniform float a_blend_lambda;
 
 bool camera_lookup(vec3 p, out vec3 xc, out vec3 nc) {
-    vec4 clip = u_view_proj * vec4(p, 1.0);
-    xc = vec3(0.0);
-    nc = vec3(0.0, 0.0, 1.0);
-    if (clip.w <= 0.0) return false;
-    vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
-    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return false;
-    vec4 a = textureLod(u_camera_position, uv, 0.0);
-    xc = a.xyz;
-    nc = textureLod(u_camera_normal, uv, 0.0).xyz;
-    return a.w > 0.5;
+    return map_lookup(u_view_proj, u_camera_position, u_camera_normal, p, xc, nc);
 }
 #endif
 
