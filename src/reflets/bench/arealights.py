@@ -18,6 +18,8 @@ import numpy as np
 from ..errors import RefletsError
 from . import register_suite
 
+#: the same plane lit by one point light at the light's centre: the cost floor of a shading pass
+POINT_LIGHT = {"type": "point", "position": [0, 1, 0], "intensity": [5, 5, 5]}
 LIGHT = {"type": "quad", "corners": [[-0.5, 1, -0.5], [0.5, 1, -0.5], [-0.5, 1, 0.5]], "radiance": [5, 5, 5]}
 
 MATERIALS = {
@@ -93,7 +95,7 @@ def bench_arealights(quick: bool, out_dir: Path) -> tuple[dict, str]:
             point_scene = reflets.load_dict(
                 {
                     **scene_dict(material, time_size),
-                    "light": [{"type": "point", "position": [0, 1, 0], "intensity": [5, 5, 5]}],
+                    "light": [POINT_LIGHT],
                 }
             )
             forward = get_technique("forward")(ctx)
@@ -166,7 +168,7 @@ def ltc_cost(ctx, size, rounds: int, frames: int = 5) -> dict:
 
     lights = {
         None: [],
-        "point": [{"type": "point", "position": [0, 1, 0], "intensity": [5, 5, 5]}],
+        "point": [POINT_LIGHT],
         "quad": [LIGHT],
     }
     techniques = {}

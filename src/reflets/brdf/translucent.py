@@ -21,6 +21,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from ..translucency.optics import beckmann_d, fresnel_transmittance
 from .base import RGB, Material, register_material, upper
 from .fresnel import fresnel_dielectric
 
@@ -115,10 +116,11 @@ class Translucent(Material):
 
         return total_reflectance(self.profile, self.medium())
 
-    def _diffuse_norm(self) -> float:
-        from ..translucency.optics import fresnel_moment
+    def diffuse_factor(self) -> np.ndarray:
+        """R_total / (π c) per channel: the far-field diffuse term without its two Fresnel transmittances."""
+        from ..translucency.optics import diffuse_normalisation
 
-        return 1.0 - 2.0 * fresnel_moment(1, self.eta, inside=False)
+        return self.total_reflectance() / (np.pi * diffuse_normalisation(self.eta))
 
     @property
     def reciprocal(self) -> bool:
@@ -131,15 +133,15 @@ class Translucent(Material):
         ok = upper(wo, wi)
         co = np.clip(wo[..., 2], 1e-12, 1.0)
         ci = np.clip(wi[..., 2], 1e-12, 1.0)
-        ft = (1.0 - fresnel_dielectric(ci, self.eta)) * (1.0 - fresnel_dielectric(co, self.eta))
-        diffuse = ft[..., None] * self.total_reflectance() / (np.pi * self._diffuse_norm())
+        ft = fresnel_transmittance(ci, self.eta) * fresnel_transmittance(co, self.eta)
+        diffuse = ft[..., None] * self.diffuse_factor()
         spec = 0.0
         if self.roughness > 0.0:
             h = wo + wi
             h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
             m = self.roughness
             ch = np.clip(h[..., 2], 1e-12, 1.0)
-            d = np.exp(-(1.0 - ch * ch) / (ch * ch * m * m)) / (np.pi * m * m * ch**4)
+            d = beckmann_d(ch, m)
             g = _beckmann_g1(co, m) * _beckmann_g1(ci, m)
             fr = fresnel_dielectric(np.sum(wi * h, axis=-1), self.eta)
             spec = (fr * d * g / (4.0 * co * ci))[..., None]
@@ -149,7 +151,7 @@ class Translucent(Material):
         return {
             "m_eta": float(self.eta),
             "m_roughness": float(self.roughness),
-            "m_diffuse": tuple(float(c) for c in self.total_reflectance() / (np.pi * self._diffuse_norm())),
+            "m_diffuse": tuple(float(c) for c in self.diffuse_factor()),
         }
 
 

@@ -174,13 +174,8 @@ def set_uniforms(program, values: dict) -> None:
         if key in program:
             if isinstance(value, bytes):
                 uniform = program[key]
-                if uniform.array_length > 1:
-                    value = value[: len(value) // _array_length(value, uniform) * uniform.array_length]
+                if uniform.array_length > 1:  # float32 / int32 components
+                    value = value[: 4 * uniform.dimension * uniform.array_length]
                 uniform.write(value)
             else:
                 program[key].value = value
-
-
-def _array_length(value: bytes, uniform) -> int:
-    """How many elements of ``uniform``'s type the bytes hold (float32 / int32 components)."""
-    return max(len(value) // (4 * uniform.dimension), 1)

@@ -8,8 +8,8 @@ models approximate, without any of their assumptions (diffusion, point source at
 condition): the independent reference the profiles are measured against.
 
 Results are per unit flux *transmitted* into the medium (the entry Fresnel factor is the caller's), split into
-single scattering (photons that leave after exactly one event) and multiple scattering (two or more), with a
-radial exitance profile R(r) per unit area and the Monte Carlo standard error of every total.
+single scattering (photons that leave after exactly one event) and multiple scattering (two or more), with the
+Monte Carlo standard error of each.
 """
 
 from __future__ import annotations
@@ -19,22 +19,19 @@ from dataclasses import dataclass
 import numpy as np
 from rich.progress import Progress
 
+from ..brdf.base import orthonormal_basis
 from ..translucency.medium import Medium
 from ..translucency.optics import fresnel_reflectance, henyey_greenstein, refracted_cos, sample_henyey_greenstein
 
 
 @dataclass
 class SlabResult:
-    """Exitant flux per unit transmitted flux; ``profile[k]`` = multiple-scattering exitance per unit area in the
-    ring [r_edges[k], r_edges[k+1]) (mm⁻²), comparable with a diffusion profile R_d(r)."""
+    """Exitant flux per unit transmitted flux, split by scattering order."""
 
     single: float
     multiple: float
     single_stderr: float
     multiple_stderr: float
-    r_edges: np.ndarray
-    profile: np.ndarray
-    profile_stderr: np.ndarray
     photons: int
 
     @property
@@ -45,12 +42,7 @@ class SlabResult:
 def _scatter(d: np.ndarray, cos_t: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """Rotate unit directions d by polar angle acos(cos_t) and azimuth phi (a frame built around each d)."""
     sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t * cos_t))
-    # orthonormal basis (Duff et al. 2017)
-    s = np.where(d[:, 2] >= 0.0, 1.0, -1.0)
-    a = -1.0 / (s + d[:, 2])
-    b = d[:, 0] * d[:, 1] * a
-    t1 = np.stack([1.0 + s * d[:, 0] ** 2 * a, s * b, -s * d[:, 0]], axis=1)
-    t2 = np.stack([b, s + d[:, 1] ** 2 * a, -d[:, 1]], axis=1)
+    t1, t2 = orthonormal_basis(d)
     return t1 * (sin_t * np.cos(phi))[:, None] + t2 * (sin_t * np.sin(phi))[:, None] + d * cos_t[:, None]
 
 
@@ -59,7 +51,6 @@ def slab_reflectance(
     photons: int = 200_000,
     *,
     cos_incidence: float = 1.0,
-    r_edges=None,
     seed: int = 0,
     chunk: int = 200_000,
     roulette_weight: float = 1e-3,
@@ -71,13 +62,9 @@ def slab_reflectance(
         raise ValueError("slab_reflectance takes a one-channel medium: use medium.channel(c)")
     sigma_t = float(medium.sigma_t)
     albedo = float(medium.albedo)
-    mfp = 1.0 / float(medium.sigma_t_prime)
-    r_edges = np.asarray(r_edges if r_edges is not None else np.geomspace(1e-3, 50.0, 41) * mfp, dtype=np.float64)
     rng = np.random.default_rng(seed)
     sums = np.zeros(2)  # single, multiple: Σ w
     sums2 = np.zeros(2)  # Σ w² (per photon: a photon leaves once)
-    ring = np.zeros(len(r_edges) - 1)
-    ring2 = np.zeros(len(r_edges) - 1)
     cos_in = float(refracted_cos(cos_incidence, medium.eta))
     sin_in = np.sqrt(max(0.0, 1.0 - cos_in * cos_in))
     done = 0
@@ -106,17 +93,10 @@ def slab_reflectance(
                 d[o[reflect], 2] *= -1.0
                 leave = o[~reflect]
                 if leave.size:
-                    r = np.hypot(pos[leave, 0], pos[leave, 1])
                     single = events[leave] == 1
                     for k, sel in ((0, single), (1, ~single)):
                         sums[k] += w[leave[sel]].sum()
                         sums2[k] += (w[leave[sel]] ** 2).sum()
-                    mult = leave[~single]
-                    h = np.histogram(np.hypot(pos[mult, 0], pos[mult, 1]), bins=r_edges, weights=w[mult])[0]
-                    h2 = np.histogram(np.hypot(pos[mult, 0], pos[mult, 1]), bins=r_edges, weights=w[mult] ** 2)[0]
-                    ring += h
-                    ring2 += h2
-                    del r
                     w[leave] = 0.0
             inside = idx[~out]
             pos[inside] += s[~out, None] * d[inside]
@@ -131,19 +111,13 @@ def slab_reflectance(
                 w[low[survive]] *= 10.0
                 w[low[~survive]] = 0.0
             idx = idx[w[idx] > 0.0]
-    area = np.pi * (r_edges[1:] ** 2 - r_edges[:-1] ** 2)
     mean = sums / photons
     stderr = np.sqrt(np.maximum(sums2 / photons - mean**2, 0.0) / photons)
-    prof = ring / photons / area
-    prof_err = np.sqrt(np.maximum(ring2 / photons - (ring / photons) ** 2, 0.0) / photons) / area
     return SlabResult(
         single=float(mean[0]),
         multiple=float(mean[1]),
         single_stderr=float(stderr[0]),
         multiple_stderr=float(stderr[1]),
-        r_edges=r_edges,
-        profile=prof,
-        profile_stderr=prof_err,
         photons=photons,
     )
 

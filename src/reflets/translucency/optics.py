@@ -21,6 +21,7 @@ __all__ = [
     "fresnel_reflectance",
     "fresnel_transmittance",
     "fresnel_moment",
+    "diffuse_normalisation",
     "gauss_legendre",
     "fresnel_moment_fit",
     "diffuse_fresnel_reflectance_fit",
@@ -69,10 +70,17 @@ def fresnel_moment(k: int, eta, *, inside: bool = True, nodes: int = 256):
     return float(out[0]) if scalar else out
 
 
+@functools.cache
+def diffuse_normalisation(eta: float) -> float:
+    """c = 1 − 2 C₁ for light arriving from outside: ∫ F_T(θ) cosθ dω / π, d'Eon's normalisation of the
+    directional part of S_d (so that a uniformly lit flat sample re-emits F_T(θ_i) R_total)."""
+    return 1.0 - 2.0 * fresnel_moment(1, float(eta), inside=False)
+
+
 def fresnel_moment_fit(k: int, eta):
     """d'Eon & Irving's polynomial fits of 2C_1 and 3C_2, returned as C_k (k = 1 or 2), for light from inside
     a medium of relative index η (the moments of F_R(μ; 1/η)). Agrees with :func:`fresnel_moment` within 0.005
-    for η ∈ [1.1, 1.6] (tests/translucency/test_optics.py)."""
+    for η ∈ [1.1, 1.6] (tests/translucency/test_translucency_optics.py)."""
     e = np.asarray(eta, dtype=np.float64)
     if k == 1:
         low = 0.919317 - 3.4793 * e + 6.75335 * e**2 - 7.80989 * e**3 + 4.98554 * e**4 - 1.36881 * e**5

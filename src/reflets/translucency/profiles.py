@@ -112,12 +112,11 @@ def total_reflectance(profile: str, medium: Medium) -> np.ndarray:
 
 @functools.lru_cache(maxsize=256)
 def _total_reflectance(profile: str, sigma_a: tuple, sigma_s: tuple, g: float, eta: float) -> tuple:
+    if profile == "normalized_diffusion":  # normalised by construction: ∫ = A, the better dipole's
+        return _total_reflectance("better_dipole", sigma_a, sigma_s, g, eta)
     out = []
     for a, s in zip(sigma_a, sigma_s, strict=True):
         m = Medium(np.float64(a), np.float64(s), g, eta)
-        if profile == "normalized_diffusion":
-            out.append(float(total_reflectance("better_dipole", m)[0]))  # normalised by construction: ∫ = A
-            continue
         mfp = float(m.mean_free_path)
 
         def integrand(u, m=m):

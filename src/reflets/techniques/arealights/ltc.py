@@ -64,10 +64,9 @@ from pydantic import Field
 
 from ...errors import RefletsError
 from ...gpu import ProgramSpec
-from ...scene.model import PolygonLight, QuadLight
 from ..base import register_technique
 from . import ltc_fit
-from .base import AREA_PROGRAM, SHADERS, AreaLightParams, AreaLightTechnique, polygon_record
+from .base import AREA_PROGRAM, POLY_STRIDE, SHADERS, AreaLightParams, AreaLightTechnique
 from .ltc_fit import FAMILIES, LtcTable
 
 LTC_FLAGS = {"LTC_SIZE_THETA", "LTC_SIZE_ROUGH", "LTC_EDGE_P", "LTC_EDGE_Q", "LTC_DIFFUSE", "LTC_LOBE"}
@@ -243,43 +242,51 @@ class Ltc(AreaLightTechnique):
     def flags(self, material) -> dict[str, object]:
         choice = self._choice(material)
         size = choice.table.size if choice.table is not None else (1, 1)
-        polygons = self._polygons()
-        counts = {len(light.polygon()) for light in polygons}
+        rows = self._polygon_rows
+        counts = {int(rows[i + 1][3]) for i in range(0, len(rows), POLY_STRIDE)}  # record row 1: vertex count
         defines = ltc_fit.glsl_defines(
             size,
             diffuse=max(choice.diffuse) > 0.0,
             lobe=choice.table is not None,
-            uniform_lights=len(polygons) if len(polygons) <= UNIFORM_LIGHTS else 0,
+            uniform_lights=len(rows) // POLY_STRIDE if self._lights_in_uniforms() else 0,
             vertices=counts.pop() if len(counts) == 1 else 0,
         )
         profile = PROFILE_STAGES.index(self.params.profile)
         return {**super().flags(material), **defines, "LTC_PROFILE": profile}
 
-    def _polygons(self) -> list:
-        """The polygon lights of the scene being prepared, in the light buffer's order."""
-        return [light for light in self.scene.light if isinstance(light, QuadLight | PolygonLight)]
+    def polygon_rows(self, scene) -> list[tuple]:
+        """The light buffer's rows, kept: the uniform copy and the vertex-count flag are made from them."""
+        self._polygon_rows = super().polygon_rows(scene)
+        return self._polygon_rows
+
+    def _lights_in_uniforms(self) -> bool:
+        return 0 < len(self._polygon_rows) <= UNIFORM_LIGHTS * POLY_STRIDE
 
     def material_uniforms(self, material) -> dict[str, object]:
         choice = self._choice(material)
+        lights = (
+            {"a_ltc_lights": np.asarray(self._polygon_rows, np.float32).tobytes()} if self._lights_in_uniforms() else {}
+        )
         return {
             **super().material_uniforms(material),
             "a_ltc_roughness": choice.roughness,
             "a_ltc_scale": choice.scale,
             "a_ltc_diffuse": choice.diffuse,
-            **self._light_uniforms(),
+            **lights,
         }
 
-    def _light_uniforms(self) -> dict[str, object]:
-        polygons = self._polygons()
-        if not polygons or len(polygons) > UNIFORM_LIGHTS:
-            return {}
-        rows = [row for light in polygons for row in polygon_record(light)]
-        return {"a_ltc_lights": np.asarray(rows, np.float32).tobytes()}
+    def release(self) -> None:
+        self._table_textures = {}  # the textures go with the other GPU objects
+        super().release()
 
     def material_textures(self, material) -> dict[str, object]:
         table = self._choice(material).table
         if table is None:
             return {}
+        uploaded = self.__dict__.setdefault("_table_textures", {})  # one upload per table, shared by meshes
+        key = id(table)
+        if key in uploaded:
+            return uploaded[key]
         textures = {}
         size = table.size
         magnitude = np.concatenate([table.magnitude, np.zeros(table.magnitude.shape[:2] + (1,), np.float32)], axis=-1)
@@ -290,4 +297,5 @@ class Ltc(AreaLightTechnique):
             tex.repeat_x = tex.repeat_y = False
             self._objects.append(tex)
             textures[name] = tex
+        uploaded[key] = textures
         return textures

@@ -167,14 +167,11 @@ class Family:
 
 
 _PHONG = {"normalized": True, "kd": (0, 0, 0), "ks": (1, 1, 1)}
-_PHONG_ALPHA_MIN = float(np.sqrt(2.0 / (1e6 + 2.0)))
 FAMILIES: dict[str, Family] = {
     "ggx": Family("ggx", "microfacet", {"distribution": "ggx", "fresnel": "none"}, "alpha"),
     "beckmann": Family("beckmann", "microfacet", {"distribution": "beckmann", "fresnel": "none"}, "alpha"),
-    "phong": Family("phong", "phong", {"normalized": True, "kd": (0, 0, 0), "ks": (1, 1, 1)}, "exponent"),
-    "blinn_phong": Family(
-        "blinn_phong", "blinn_phong", {"normalized": True, "kd": (0, 0, 0), "ks": (1, 1, 1)}, "exponent"
-    ),
+    "phong": Family("phong", "phong", _PHONG, "exponent"),
+    "blinn_phong": Family("blinn_phong", "blinn_phong", _PHONG, "exponent"),
     "ward": Family("ward", "ward", {"variant": "duer", "kd": (0, 0, 0), "ks": (1, 1, 1)}, "alpha"),
 }
 
@@ -182,17 +179,9 @@ FAMILIES: dict[str, Family] = {
 # ------------------------------------------------------------------------------ LTC math
 
 
-def params_to_matrix(p: np.ndarray) -> np.ndarray:
-    """M = [[a, 0, b], [0, c, 0], [d, 0, 1]] from optimisation parameters (log a', log c, b, d), a = a' + b d."""
-    p = np.asarray(p, dtype=np.float64)
-    ap, c, b, d = np.exp(p[..., 0]), np.exp(p[..., 1]), p[..., 2], p[..., 3]
-    m = np.zeros(p.shape[:-1] + (3, 3))
-    m[..., 0, 0], m[..., 0, 2], m[..., 1, 1], m[..., 2, 0], m[..., 2, 2] = ap + b * d, b, c, d, 1.0
-    return m
-
-
 def params_to_minv(p: np.ndarray) -> np.ndarray:
-    """The stored form (m02, m11, m20, m22) of a'·M⁻¹ = [[1, 0, −b], [0, a'/c, 0], [−d, 0, a' + b d]]."""
+    """The stored form (m02, m11, m20, m22) of a'·M⁻¹ = [[1, 0, −b], [0, a'/c, 0], [−d, 0, a' + b d]], for
+    M = [[a, 0, b], [0, c, 0], [d, 0, 1]] with optimisation parameters (log a', log c, b, d), a = a' + b d."""
     p = np.asarray(p, dtype=np.float64)
     ap, c, b, d = np.exp(p[..., 0]), np.exp(p[..., 1]), p[..., 2], p[..., 3]
     return np.stack([-b, ap / c, -d, ap + b * d], axis=-1)

@@ -6,8 +6,8 @@ integrand is bilinear in (ρ, θ) between the four corner values, and ∫∫ c �
 corner Δθ Δρ (ρ_j/2 + Δρ/6)/2 and each outer corner Δθ Δρ (ρ_j/2 + Δρ/3)/2 (Δρ = ρ_{j+1} − ρ_j). Summed over
 the cells around a node, the integral is Σ_j W_j Σ_a c_{j,a}: one weight per ring. This is the document's
 bilinear cell integration written in polar coordinates, where the corrected factor of its eq. (θ₂ − θ₁)/72 ·
-r_vᵀ(l₁M₂ + l₂M₁)c_v is exact by construction (tests/translucency/test_translucency_rings.py integrates
-bilinear and smooth functions with it). The corner values use the true distance to the entry point (the
+r_vᵀ(l₁M₂ + l₂M₁)c_v is exact by construction (tests/translucency/test_translucency_gpu.py integrates
+bilinear functions and the profiles with it). The corner values use the true distance to the entry point (the
 document's "true geometry"), the cell areas the plane's.
 
 f_β(x) = β √x (1 − x)/(1 − β) + x (eˣ − 1)/(e − 1) concentrates rings near the centre where R_d varies most;
@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 from scipy import optimize
+
+from ...translucency.optics import gauss_legendre
 
 BETA_MAX = 0.68
 
@@ -64,8 +66,7 @@ def product_weights(radii: np.ndarray, angles: int, rd, order: int = 32, first_c
     where the bilinear rule overestimates the convex profile (+2…5 % at 12 rings, skin1). ``first_cell =
     False`` leaves out the disc ρ < ρ₁ (the shader integrates it per direction, see translucent.frag)."""
     rho = np.asarray(radii, dtype=np.float64)
-    t, w = np.polynomial.legendre.leggauss(order)
-    t, w = 0.5 * (t + 1.0), 0.5 * w
+    t, w = gauss_legendre(order)
     d_theta = 2.0 * np.pi / angles
     out = np.zeros((len(rho), 3))
     for j in range(0 if first_cell else 1, len(rho) - 1):

@@ -43,7 +43,7 @@ from ...gpu import ProgramSpec, get_program, set_uniforms
 from ...scene.geometry import bounding_sphere, mesh_data
 from ...scene.model import DirectionalLight, PointLight, Scene
 from ...scene.transform import look_at, perspective
-from ...translucency.optics import fresnel_moment
+from ...translucency.optics import diffuse_normalisation
 from ...translucency.profiles import PROFILES, capture_radius, glsl_uniforms, profile_rd
 from ...translucency.single import march_depths, quadrature_weights
 from ..base import register_technique
@@ -226,14 +226,13 @@ class Translucency(Forward):
             else np.asarray(light.position, np.float64)
         )
         power = light.irradiance if isinstance(light, DirectionalLight) else light.intensity
-        c = 1.0 - 2.0 * fresnel_moment(1, material.eta, inside=False)
         return {
             **glsl_uniforms(material.profile, medium),
             "a_sigma_s": tuple(float(v) for v in medium.sigma_s),
             "a_sigma_t": tuple(float(v) for v in medium.sigma_t),
             "a_g": float(material.g),
             "a_mm_per_unit": float(material.mm_per_unit),
-            "a_diffuse_norm": (1.0 / (np.pi * c),) * 3,
+            "a_diffuse_norm": (1.0 / (np.pi * diffuse_normalisation(material.eta)),) * 3,
             "a_ss_depth": depths.astype(np.float32).tobytes(),
             "a_ss_weight": quadrature_weights(depths, p.ss_rule).astype(np.float32).tobytes(),
             "a_ring_radius": (radii_mm / material.mm_per_unit).astype(np.float32).tobytes(),
