@@ -57,14 +57,23 @@ scene (Phong e = 500): `ltc` 17.6 ms (relMSE 6.4e-5) < `biased` t = 0.99, 4² 19
 `ltc` is 4–40× faster than every sampling method at a relative MSE of 1e-4 … 6e-3, against a reference whose
 own noise floor is 1e-4 … 2e-4 at 256 spp.
 
-**`ltc` cost** (interleaved rounds in the same run, GGX α = 0.3, one unit light): 12.5 ms per frame against
-10.9 ms for the same plane lit by one point light: **1.14×** (three.js r187's RectAreaLight: 1.8×). The
-absolute bar is **not** met: three.js draws this scene in about 5.5 ms on the same rasteriser, 2.3× faster.
-Where the time goes (dropping one stage at a time): the float32 HDR target and the forward pass's shading
-frame alone cost 4.0 ms (three.js renders into an 8-bit target: its whole point-light frame is 3.0 ms);
-the polygon integral 4.8 ms (of which horizon clipping 2.6 ms), the two table fetches 3.3 ms. The speed work
-of this issue: light counts and BRDF switches became compile-time (a loop over an absent light type still
-costs on llvmpipe), which took `ltc` from 47–50 ms to 12 ms and the point-light frame from 35 ms to 11 ms.
+**`ltc` cost** (`reflets bench ltc-cost`: interleaved rounds in one run, GGX α = 0.3, one unit light,
+800×600, benchmarks/results/ltc-cost.md). On llvmpipe a frame's time is bimodal — two threads when the host
+gives the second core, one when it does not — so medians move with the host's load (a session that ran its
+other work beside the benchmark measured 12.5 ms) while the 10th percentile (two-thread frames) and the
+ratios stay put. Committed run: `ltc` **4.7 ms** (10th percentile; median 7.9 ms) against 3.5 ms (median
+5.5 ms) for the same plane lit by one point light: **1.36×** (medians 1.42×). three.js r187's RectAreaLight
+draws this scene in about 5.5 ms on this rasteriser, 1.8× its 3.0 ms point-light frame: our point-light
+frame is close to its (3.5 vs 3.0 ms two-thread) and our `ltc` frame is faster (4.7 vs 5.5 ms); three.js was not
+run beside ours, so the absolute comparison crosses runs. Where the time goes (10th percentiles, one stage
+dropped at a time): float32 HDR target and shading frame 1.4 ms, table setup with the two fetches 1.2 ms, the
+polygon integral 2.1 ms of which horizon clipping 1.0 ms. `horizon = "sphere"` replaces the edge-by-edge
+clipping with what production engines do (the cap with the polygon's vector form factor, clipped in closed
+form — exact where nothing crosses the horizon): 3.8 ms, relative MSE 2.2e-3 → 7.5e-3 at GGX α = 0.1 and
+5.2e-4 → 8.0e-4 at Phong e = 150 (unchanged at GGX α = 0.3); `exact` stays the default. The speed work of
+this issue: light counts and BRDF switches became compile-time (a loop over an absent light type still costs
+on llvmpipe), which took `ltc` from 47–50 ms to 12 ms and the point-light frame from 35 ms to 11 ms in the
+loaded session's medians.
 
 The tests (tests/techniques/) check: `analytic` against the exact formula (max relative error < 1e-3);
 `brute` converging at the midpoint order; `mc` unbiased over 32 seeds and its error falling as 1/√spp;

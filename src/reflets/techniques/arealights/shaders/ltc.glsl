@@ -73,11 +73,40 @@ void ltc_clipped_edge(vec3 a, vec3 b, inout float sum, inout vec3 exit_point, in
     if (!above_a && above_b) entry_point = p;
 }
 
+// LTC_HORIZON 1: the field's cheaper horizon (Hill & Heitz 2016, "Real-Time Area Lighting: a Journey from
+// Research to Production"): the unclipped vector form factor F = (1/2π) Σ θ Γ, oriented towards the polygon, and
+// the horizon-clipped integral of the spherical cap with the same F (|F| = sin²σ, F.z/|F| = cos of its
+// elevation) in closed form (Snyder 1996). Exact where the transformed polygon lies wholly above the horizon
+// (the result is F.z there); an approximation where it crosses it.
+float ltc_clipped_sphere(vec3 F) {
+    float l = length(F);
+    return F.z * F.z > l * l * l ? max(F.z, 0.0) : max((l * l + F.z) / (l + 1.0), 0.0);
+}
+
+float ltc_polygon_integral_sphere(int i, int n, mat3 T, vec3 x) {
+    vec3 first = normalize(T * (ltc_vertex(i, 0) - x));
+    vec3 a = first;
+    vec3 F = vec3(0.0);
+    for (int k = 1; k < n; ++k) {
+        vec3 b = normalize(T * (ltc_vertex(i, k) - x));
+        vec3 c = cross(a, b);
+        F += ltc_theta_over_sin(dot(a, b), inversesqrt(max(dot(c, c), 1e-30))) * c;
+        a = b;
+    }
+    vec3 c = cross(a, first);
+    F += ltc_theta_over_sin(dot(a, first), inversesqrt(max(dot(c, c), 1e-30))) * c;
+    F *= (dot(F, first) < 0.0 ? -0.5 : 0.5) * INV_PI;  // either winding: F points into the polygon
+    return ltc_clipped_sphere(F);
+}
+
 // ∫ max(0, ω_z)/π dω over the spherical polygon of light i's vertices, transformed by T after subtracting x:
 // (1/2π)|Σ θ_k Γ_k·z| over the polygon clipped to z ≥ 0 (Lambert's formula). The absolute value makes either
 // winding right, which is how a two-sided light seen from behind is handled. No local arrays (the vertices
 // stream from the light records), no data-dependent branch: this is what keeps it fast on SIMD rasterisers.
 float ltc_polygon_integral(int i, int n, mat3 T, vec3 x) {
+#if LTC_HORIZON == 1
+    return ltc_polygon_integral_sphere(i, n, T, x);
+#endif
     vec3 first = normalize(T * (ltc_vertex(i, 0) - x));
     vec3 a = first;
     vec3 exit_point = vec3(0.0), entry_point = vec3(0.0);
