@@ -52,6 +52,7 @@ class DemoEntry:
     methods: tuple[Method, ...] = (Method("forward"),)
     reference: bool = False
     visibility: bool = True
+    reference_spp: int = REFERENCE_SPP  # 1 where every light is a delta light (the reference is then exact)
 
 
 AREA_METHODS = (
@@ -83,6 +84,16 @@ DEMO: list[DemoEntry] = [
     ),
     DemoEntry("31_translucent_bunny.toml", (Method("translucent"), Method("forward"))),
     DemoEntry("32_translucent_dragon.toml", (Method("translucent"),)),
+    DemoEntry(
+        "40_reflect_teapot_sphere.toml",
+        (Method("fermat"), Method("fermat", (("subdivide", 1),)), Method("fermat", (("solver", "document"),))),
+        reference=True,
+        visibility=False,
+        reference_spp=1,
+    ),
+    DemoEntry(
+        "41_reflect_room.toml", (Method("fermat"), Method("forward")), reference=True, visibility=False, reference_spp=8
+    ),
 ]
 
 
@@ -133,7 +144,7 @@ def run_demo(out_dir: Path, size: tuple[int, int] | None = None) -> list[DemoRes
             result = _render_entry(ctx, entry.scene, method, size, out_dir)
             if entry.reference:
                 if entry.scene not in references:
-                    progress.update(task, description=f"{entry.scene} · NumPy reference, {REFERENCE_SPP} spp")
+                    progress.update(task, description=f"{entry.scene} · NumPy reference, {entry.reference_spp} spp")
                     references[entry.scene] = _reference_image(entry, size, out_dir)
                 result.reference = _compare_with_reference(result, references[entry.scene], out_dir)
             results.append(result)
@@ -190,7 +201,7 @@ def _reference_image(entry: DemoEntry, size, out_dir: Path):
     from .reference import reference
 
     scene = load_scene(scene_path(entry.scene))
-    ref = reference(scene, spp=REFERENCE_SPP, size=size, visibility=entry.visibility, progress=False)
+    ref = reference(scene, spp=entry.reference_spp, size=size, visibility=entry.visibility, progress=False)
     stem = f"{Path(entry.scene).stem}.reference"
     write_image(out_dir / f"{stem}.exr", ref.image)
     write_image(out_dir / f"{stem}.stderr.exr", ref.stderr)
@@ -209,7 +220,7 @@ def _compare_with_reference(result: DemoResult, reference, out_dir: Path) -> dic
     return {
         **compare(image, ref.image),
         **zscores(image, ref.image, ref.stderr),
-        "spp": REFERENCE_SPP,
+        "spp": ref.spp,
         "seconds": ref.seconds,
         "png": ref_png,
         "diff": f"{stem}.diff.png",

@@ -13,13 +13,14 @@ from .lafortune import Lafortune
 from .lambert import Lambert
 from .measured import Measured
 from .microfacet import Microfacet
+from .mirror import Mirror
 from .phong import Phong
 from .translucent import Translucent
 from .ward import Ward
 
 #: the scene-file form of any registered material, chosen by its ``type`` key
 MaterialSpec = Annotated[
-    Lambert | Phong | BlinnPhong | Lafortune | Ward | AshikhminShirley | Microfacet | Measured | Translucent,
+    Lambert | Phong | BlinnPhong | Lafortune | Ward | AshikhminShirley | Microfacet | Measured | Translucent | Mirror,
     Field(discriminator="type"),
 ]
 
@@ -37,4 +38,5 @@ __all__ = [
     "Microfacet",
     "Measured",
     "Translucent",
+    "Mirror",
 ]

@@ -117,6 +117,8 @@ class ProgramSpec:
     geometry: str | None = None
     compute: str | None = None
     flags: frozenset[str] = frozenset()
+    #: vertex outputs captured by transform feedback (a vertex-only program read back per vertex)
+    varyings: tuple[str, ...] = ()
 
 
 _CACHE: dict[tuple, object] = {}
@@ -154,6 +156,7 @@ def get_program(ctx, spec: ProgramSpec, *, slots: dict[str, str] | None = None, 
                 vertex_shader=stages["vertex"],
                 fragment_shader=stages.get("fragment"),
                 geometry_shader=stages.get("geometry"),
+                varyings=spec.varyings,
             )
     except Exception as exc:  # moderngl raises plain Exceptions carrying the driver log
         text = str(exc)

@@ -54,7 +54,7 @@ class SceneGeometry:
 
     def __init__(self, scene: Scene):
         rtcore_scene, mesh_construction = _embree()
-        positions, normals, tangents, faces, materials = [], [], [], [], []
+        positions, normals, tangents, faces, materials, meshes = [], [], [], [], [], []
         names = list(scene.materials)
         offset = 0
         for index, mesh in enumerate(scene.mesh):
@@ -64,6 +64,7 @@ class SceneGeometry:
             tangents.append(data.tangents.astype(np.float64))
             faces.append(data.indices.astype(np.int64) + offset)
             materials.append(np.full(data.n_triangles, names.index(mesh.material)))
+            meshes.append(np.full(data.n_triangles, index))
             offset += data.n_vertices
         self.material_names = names
         self.vertices = np.concatenate(positions) if positions else np.zeros((0, 3))
@@ -71,6 +72,7 @@ class SceneGeometry:
         self.tangents = np.concatenate(tangents) if tangents else np.zeros((0, 4))
         self.faces = np.concatenate(faces) if faces else np.zeros((0, 3), np.int64)
         self.face_material = np.concatenate(materials) if materials else np.zeros(0, np.int64)
+        self.face_mesh = np.concatenate(meshes) if meshes else np.zeros(0, np.int64)  # index into scene.mesh
 
         # Emitters: fan triangles of every quad / polygon light, remembering the light index.
         self.lights = [(i, light) for i, light in enumerate(scene.light) if isinstance(light, QuadLight | PolygonLight)]

@@ -6,14 +6,19 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene.environment import equirect_direction, equirect_uv, lookup, rotation_y
+from ..scene.lightmask import mask_lookup, quad_uv
 from ..scene.model import EnvironmentLight, PolygonLight, QuadLight
 
 
 class PolygonSampler:
-    """Uniform area sampling of a planar convex polygon (fan triangles chosen ∝ area); pdf_A = 1 / area."""
+    """Uniform area sampling of a planar convex polygon (fan triangles chosen ∝ area); pdf_A = 1 / area.
 
-    def __init__(self, light: QuadLight | PolygonLight):
+    A quad's ``mask`` (from ``scene.lightmask.load_mask``) multiplies the emission at each point
+    (:meth:`radiance_at`); the area sampling stays uniform over the whole quad, so it stays unbiased."""
+
+    def __init__(self, light: QuadLight | PolygonLight, mask: np.ndarray | None = None):
         self.light = light
+        self.mask = mask
         poly = light.polygon()
         self.a = poly[0]
         self.b, self.c = poly[1:-1], poly[2:]
@@ -32,6 +37,12 @@ class PolygonSampler:
         u1 = np.clip((u1 - lo) / (self.cdf[k] - lo), 0.0, 1.0)
         s = np.sqrt(u1)  # uniform in a triangle (Osada et al. 2002)
         return (1 - s)[:, None] * self.a + (s * (1 - u2))[:, None] * self.b[k] + (s * u2)[:, None] * self.c[k]
+
+    def radiance_at(self, points: np.ndarray) -> np.ndarray:
+        """(N, 3) emitted radiance at points on the light (the mask's nearest texel times the radiance)."""
+        if self.mask is None:
+            return np.broadcast_to(self.radiance, (len(points), 3))
+        return mask_lookup(self.mask, *quad_uv(self.light, points))[:, None] * self.radiance
 
     def emitted(self, direction_to_light: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(cosθ at the light, mask of rays that see the emitting side)."""

@@ -33,7 +33,9 @@ Conventions (each checked by ``tests/reference/test_mitsuba_bridge.py``):
   ``area`` emitter. ``two_sided`` adds a flipped copy 10⁻⁴ × the light's size behind the first, so each
   copy is hit only from its emitting side (coplanar copies would hide each other at random); Mitsuba picks
   among emitters uniformly, so half the light samples of a two-sided light go to the copy facing away
-  (unbiased, but several times the variance at equal spp).
+  (unbiased, but several times the variance at equal spp). A quad's ``mask`` becomes the emitter's radiance
+  texture: a ``bitmap`` of radiance × mask (EXR in ``workdir``, ``raw``, ``filter_type = "nearest"``, clamped),
+  its v = 0 row first (Mitsuba's rectangle and PLY uv), transposed on the flipped copy whose axes are swapped.
   ``environment`` → ``envmap`` from an EXR written in ``workdir`` (the image already multiplied by
   ``scale``), ``to_world`` = rotation by ``rotate_y`` about +y. Light geometry has a black BSDF (it reflects
   nothing) but, like every surface in Mitsuba, it casts shadows: Mitsuba always traces visibility.
@@ -60,6 +62,7 @@ import numpy as np
 
 from ..errors import ArgumentError, RefletsError, SceneError
 from ..scene.geometry import clip_planes, mesh_data
+from ..scene.lightmask import load_mask
 from ..scene.model import (
     DirectionalLight,
     EnvironmentLight,
@@ -209,8 +212,23 @@ def _microfacet_to_mitsuba(name: str, material) -> dict[str, Any]:
     return out
 
 
-def _area_emitter(radiance) -> dict[str, Any]:
-    return {"type": "area", "radiance": _rgb(radiance)}
+def _area_emitter(radiance, texture: Path | None = None) -> dict[str, Any]:
+    if texture is None:
+        return {"type": "area", "radiance": _rgb(radiance)}
+    # A masked quad: radiance × mask as a float EXR, looked up like our masks (nearest texel, clamped).
+    bitmap = {"type": "bitmap", "filename": str(texture), "raw": True, "filter_type": "nearest", "wrap_mode": "clamp"}
+    return {"type": "area", "radiance": bitmap}
+
+
+def _mask_texture(light: QuadLight, mask: np.ndarray | None, path: Path, transpose: bool = False) -> Path | None:
+    """The EXR of radiance × mask for Mitsuba's uv (row 0 at v = 0, as ``load_mask`` stores it: Mitsuba's
+    bitmaps put row 0 at uv.y = 0, so the v = 0 row goes first); ``transpose`` swaps u and v."""
+    if mask is None:
+        return None
+    from ..imageio import write_image
+
+    values = mask.T if transpose else mask
+    return write_image(path, values[:, :, None] * np.asarray(light.radiance, dtype=np.float32))
 
 
 #: light geometry reflects nothing (Mitsuba would give a shape without a BSDF a grey diffuse one)
@@ -221,13 +239,17 @@ def _is_rectangle(e1: np.ndarray, e2: np.ndarray) -> bool:
     return abs(float(e1 @ e2)) <= 1e-6 * float(np.linalg.norm(e1) * np.linalg.norm(e2))
 
 
-def _quad_shapes(light: QuadLight, workdir: Path, stem: str) -> dict[str, dict[str, Any]]:
+def _quad_shapes(
+    light: QuadLight, workdir: Path, stem: str, mask: np.ndarray | None = None
+) -> dict[str, dict[str, Any]]:
     p = light.polygon()
     e1, e2 = p[1] - p[0], p[3] - p[0]
     normal = np.cross(e1, e2)
     normal /= np.linalg.norm(normal)
     if not _is_rectangle(e1, e2):
-        return _polygon_shapes(p, light.radiance, light.two_sided, workdir, stem)
+        texture = _mask_texture(light, mask, workdir / f"{stem}_mask.exr")
+        uvs = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]) if texture else None
+        return _polygon_shapes(p, light.radiance, light.two_sided, workdir, stem, texture, uvs)
     centre = p[0] + 0.5 * (e1 + e2)
     gap = TWO_SIDED_GAP * max(np.linalg.norm(e1), np.linalg.norm(e2))
     shapes = {}
@@ -237,16 +259,19 @@ def _quad_shapes(light: QuadLight, workdir: Path, stem: str) -> dict[str, dict[s
     for k, (a, b, n, c) in enumerate(sides):
         m = np.eye(4)
         m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = 0.5 * a, 0.5 * b, n, c
+        texture = _mask_texture(light, mask, workdir / f"{stem}_{k}_mask.exr", transpose=k == 1)
         shapes[f"{stem}_{k}"] = {
             "type": "rectangle",
             "to_world": _transform(m),
-            "emitter": _area_emitter(light.radiance),
+            "emitter": _area_emitter(light.radiance, texture),
             "bsdf": dict(_BLACK),
         }
     return shapes
 
 
-def _polygon_shapes(points: np.ndarray, radiance, two_sided: bool, workdir: Path, stem: str) -> dict[str, dict]:
+def _polygon_shapes(
+    points: np.ndarray, radiance, two_sided: bool, workdir: Path, stem: str, texture: Path | None = None, uvs=None
+) -> dict[str, dict]:
     points = np.asarray(points, dtype=np.float64)
     fan = np.array([[0, i, i + 1] for i in range(1, len(points) - 1)], dtype=np.uint32)
     normal = np.sum(np.cross(points, np.roll(points, -1, axis=0)), axis=0)  # Newell: CCW seen from the lit side
@@ -257,12 +282,12 @@ def _polygon_shapes(points: np.ndarray, radiance, two_sided: bool, workdir: Path
         variants.append((points - TWO_SIDED_GAP * size * normal, fan[:, ::-1]))
     shapes = {}
     for k, (pts, tri) in enumerate(variants):
-        path = write_ply(workdir / f"{stem}_{k}.ply", pts.astype(np.float32), tri)
+        path = write_ply(workdir / f"{stem}_{k}.ply", pts.astype(np.float32), tri, uvs=uvs)
         shapes[f"{stem}_{k}"] = {
             "type": "ply",
             "filename": str(path),
             "face_normals": True,
-            "emitter": _area_emitter(radiance),
+            "emitter": _area_emitter(radiance, texture),
             "bsdf": dict(_BLACK),
         }
     return shapes
@@ -377,7 +402,7 @@ def to_mitsuba_dict(
                 "irradiance": _rgb(light.irradiance),
             }
         elif isinstance(light, QuadLight):
-            out.update(_quad_shapes(light, workdir, f"light_{i}"))
+            out.update(_quad_shapes(light, workdir, f"light_{i}", load_mask(scene, i)))
         elif isinstance(light, PolygonLight):
             out.update(_polygon_shapes(light.polygon(), light.radiance, light.two_sided, workdir, f"light_{i}"))
         elif isinstance(light, EnvironmentLight):

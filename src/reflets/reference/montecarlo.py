@@ -28,9 +28,11 @@ import numpy as np
 from ..errors import ArgumentError
 from ..scene.camera import camera_basis
 from ..scene.environment import load_environment
+from ..scene.lightmask import load_masks
 from ..scene.model import DirectionalLight, PointLight, Scene
 from .geometry import EMITTERS, MESHES, SceneGeometry
 from .lights import EnvironmentSampler, PolygonSampler
+from .mirrors import MirrorBounce
 
 RAYS_PER_CHUNK = 1 << 17
 
@@ -77,13 +79,15 @@ class MonteCarloReference:
         self.heuristic = heuristic
         self.geometry = SceneGeometry(scene)
         self.materials = [scene.materials[name] for name in self.geometry.material_names]
-        self.area = [PolygonSampler(light) for _, light in self.geometry.lights]
+        masks = load_masks(scene)
+        self.area = [PolygonSampler(light, masks.get(i)) for i, light in self.geometry.lights]
         self.delta = [light for light in scene.light if isinstance(light, PointLight | DirectionalLight)]
         image = load_environment(scene)
         self.env = EnvironmentSampler(image, scene.environment) if image is not None else None
         color = scene.background_color()
         self.background = None if color is None else np.asarray(color, dtype=np.float64)
         self.dims = 2 * len(self.area) + 2 + (2 if self.env else 0) + 2  # + pixel jitter
+        self.mirrors = MirrorBounce(scene, self.geometry.face_mesh)
 
     # ------------------------------------------------------------------------------------------ driver
     def render(
@@ -132,17 +136,26 @@ class MonteCarloReference:
         cols = np.repeat(ids % width, spp)
         jitter = u[:, -2:] if pixel == "box" else np.full((len(u), 2), 0.5)
         origin, dirs = self._camera_rays(rows + jitter[:, 1], cols + jitter[:, 0], width, height)
+        out = self.trace(origin, dirs, u, mirrors=True)
+        return out.reshape(len(ids), spp, 3)
+
+    def trace(self, origin: np.ndarray, dirs: np.ndarray, u: np.ndarray, mirrors: bool = False) -> np.ndarray:
+        """Radiance arriving along rays (origin + t·dirs) from the first surface they hit; ``mirrors``: add one
+        specular bounce on reflector meshes (reference/mirrors.py)."""
         out = np.zeros((len(u), 3))
         hits = self.geometry.intersect(np.broadcast_to(origin, dirs.shape), dirs)
         miss = hits.kind < 0
         out[miss] = self._escaped(dirs[miss])
         on_emitter = np.nonzero(hits.kind == EMITTERS)[0]
         if len(on_emitter):
-            out[on_emitter] = self._emitter_radiance(hits.prim[on_emitter], dirs[on_emitter])
+            points = np.broadcast_to(origin, dirs.shape)[on_emitter] + hits.t[on_emitter, None] * dirs[on_emitter]
+            out[on_emitter] = self._emitter_radiance(hits.prim[on_emitter], dirs[on_emitter], points)
         on_mesh = np.nonzero(hits.kind == MESHES)[0]
         if len(on_mesh):
             out[on_mesh] = self._shade(on_mesh, hits, dirs, u)
-        return out.reshape(len(ids), spp, 3)
+            if mirrors and self.mirrors:
+                out[on_mesh] += self.mirrors.radiance(self, on_mesh, hits, origin, dirs, u)
+        return out
 
     def _camera_rays(self, rows: np.ndarray, cols: np.ndarray, width: int, height: int):
         cam = self.scene.camera
@@ -158,13 +171,13 @@ class MonteCarloReference:
             return self.env.radiance(dirs)
         return np.broadcast_to(self.background if self.background is not None else 0.0, dirs.shape)
 
-    def _emitter_radiance(self, prim: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    def _emitter_radiance(self, prim: np.ndarray, dirs: np.ndarray, points: np.ndarray) -> np.ndarray:
         out = np.zeros(dirs.shape)
         owner = self.geometry.emitter_owner[prim]
         for j, sampler in enumerate(self.area):
             sel = owner == j
             _, front = sampler.emitted(dirs[sel])
-            out[sel] = np.where(front[:, None], sampler.radiance, 0.0)
+            out[sel] = np.where(front[:, None], sampler.radiance_at(points[sel]), 0.0)
         return out
 
     # ------------------------------------------------------------------------------------------- shading
@@ -224,7 +237,7 @@ class MonteCarloReference:
             p_brdf = self._pdf_brdf(surf.material, wo, wi_local)
             ok = front & self._unoccluded(origin, wi, dist * (1.0 - 1e-4) - geo.epsilon)  # stop short of the light
             weight = _mis(p_light, p_brdf, self.heuristic)
-            contrib = fcos * sampler.radiance * (weight / np.where(ok, p_light, 1.0))[:, None]
+            contrib = fcos * sampler.radiance_at(y) * (weight / np.where(ok, p_light, 1.0))[:, None]
             result += np.where(ok[:, None], contrib, 0.0)
             # BRDF sampling: rays that reach this light first.
             on = valid_b & (hit_b.kind == EMITTERS)
@@ -234,7 +247,8 @@ class MonteCarloReference:
                 dist_b = hit_b.t[on]
                 p_light_b = dist_b * dist_b / (sampler.area * np.maximum(cos_l_b, 1e-300))
                 w_b = _mis(pdf_b[on], p_light_b, self.heuristic)
-                add = fcos_b[on] * sampler.radiance * (w_b / pdf_b[on])[:, None]
+                y_b = origin[on] + dist_b[:, None] * wi_b_world[on]
+                add = fcos_b[on] * sampler.radiance_at(y_b) * (w_b / pdf_b[on])[:, None]
                 result[on] += np.where(front_b[:, None], add, 0.0)
 
         if self.env is not None:

@@ -19,7 +19,7 @@ def mesh_data(scene: Scene, index: int) -> MeshData:
         if isinstance(mesh, FileMesh):
             local = load_mesh_file(scene.resolve(mesh.file))
         else:
-            params = mesh.model_dump(exclude={"name", "material", "transform", "shape"})
+            params = mesh.model_dump(exclude={"name", "material", "transform", "shape", "reflector"})
             local = SHAPES[mesh.shape](**params)
     except SceneError as exc:
         raise SceneError(

@@ -9,6 +9,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from ..errors import SceneError
+from .lightmask import load_mask
 from .model import EnvironmentLight, FileMesh, Scene
 
 
@@ -57,6 +58,7 @@ def _check_files(scene: Scene, source) -> None:
         if isinstance(mesh, FileMesh) and not scene.resolve(mesh.file).is_file():
             raise SceneError(f"mesh file not found: {scene.resolve(mesh.file)}", file=source, field=f"mesh[{i}].file")
     for i, light in enumerate(scene.light):
+        load_mask(scene, i)  # a bad mask fails here, naming light[i].mask
         if isinstance(light, EnvironmentLight) and not scene.resolve(light.file).is_file():
             raise SceneError(
                 f"environment image not found: {scene.resolve(light.file)}",

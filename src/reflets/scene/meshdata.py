@@ -57,6 +57,45 @@ class MeshData:
             indices=np.ascontiguousarray(indices, dtype=np.uint32),
         )
 
+    def subdivided(self, k: int) -> MeshData:
+        """Every triangle split into k² congruent triangles, attributes interpolated linearly (normals and
+        tangents renormalised). Vertices on shared edges are duplicated per triangle: identical inputs, so a
+        per-vertex transform (the Fermat reflection) gives identical outputs and leaves no cracks."""
+        if k <= 1:
+            return self
+        i, j = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
+        keep = (i + j) <= k
+        i, j = i[keep], j[keep]
+        w = np.stack([k - i - j, i, j], axis=1) / k  # (P, 3) barycentrics of the grid points
+        slot = -np.ones((k + 1, k + 1), dtype=np.int64)
+        slot[i, j] = np.arange(len(i))
+        a, b = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
+        up = (a + b) <= k - 1
+        down = (a + b) <= k - 2
+        local = np.concatenate(
+            [
+                np.stack([slot[a[up], b[up]], slot[a[up] + 1, b[up]], slot[a[up], b[up] + 1]], axis=1),
+                np.stack([slot[a[down] + 1, b[down]], slot[a[down] + 1, b[down] + 1], slot[a[down], b[down] + 1]], 1),
+            ]
+        )
+        corners = self.indices.astype(np.int64)  # (T, 3)
+
+        def lerp(attr: np.ndarray) -> np.ndarray:
+            return np.einsum("pc,tcd->tpd", w, attr.astype(np.float64)[corners]).reshape(-1, attr.shape[1])
+
+        pos, nrm, tan, uv = lerp(self.positions), lerp(self.normals), lerp(self.tangents[:, :3]), lerp(self.uvs)
+        nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-20)
+        tan /= np.maximum(np.linalg.norm(tan, axis=1, keepdims=True), 1e-20)
+        hand = np.repeat(self.tangents[corners[:, 0], 3], len(w))[:, None]
+        indices = (np.arange(len(corners))[:, None, None] * len(w) + local[None]).reshape(-1, 3)
+        return MeshData(
+            positions=pos.astype(np.float32),
+            normals=nrm.astype(np.float32),
+            tangents=np.concatenate([tan, hand], axis=1).astype(np.float32),
+            uvs=uv.astype(np.float32),
+            indices=np.ascontiguousarray(indices, dtype=np.uint32),
+        )
+
     def interleaved(self) -> np.ndarray:
         """Vertex buffer layout for the GPU: position 3f, normal 3f, tangent 4f, uv 2f (48 bytes)."""
         return np.ascontiguousarray(

@@ -80,6 +80,8 @@ class MeshBase(Strict):
     name: str | None = None
     material: str
     transform: Transform = Transform()
+    #: a smooth curved mirror whose reflections the ``fermat`` method renders (material type "mirror")
+    reflector: bool = False
 
 
 class FileMesh(MeshBase):
@@ -116,6 +118,13 @@ class CylinderMesh(MeshBase):
     radius: Positive = 0.5
     height: Positive = 1.0
     segments: Count = 128
+    caps: bool = True
+
+    @model_validator(mode="after")
+    def _open_reflector(self) -> CylinderMesh:
+        if self.reflector and self.caps:
+            raise ValueError("a reflector cylinder is its smooth side only: set caps = false")
+        return self
 
 
 class TorusMesh(MeshBase):
@@ -188,12 +197,18 @@ class DirectionalLight(Strict):
 
 class QuadLight(Strict):
     """Parallelogram light from corners c1 (bottom-left), c2 (bottom-right), c4 (top-left), constant
-    radiance; emits on the side of normalize((c2 − c1) × (c4 − c1)) unless two-sided."""
+    radiance; emits on the side of normalize((c2 − c1) × (c4 − c1)) unless two-sided.
+
+    ``mask`` (optional image, path relative to the scene file) shapes the light as in the area-light
+    document: its value in [0, 1] multiplies the radiance, u along c1 → c2, v along c1 → c4, the image's
+    bottom-left texel at c1 (texture convention), each texel a cell of constant emission (nearest texel, so
+    every renderer integrates the same emitter; ``scene/lightmask.py``)."""
 
     type: Literal["quad"]
     corners: tuple[Vec3, Vec3, Vec3]
     radiance: Color
     two_sided: bool = False
+    mask: Path | None = None
 
     @model_validator(mode="after")
     def _non_degenerate(self) -> QuadLight:
@@ -279,6 +294,11 @@ class Scene(Strict):
             if m.material not in self.materials:
                 known = ", ".join(sorted(self.materials)) or "none defined"
                 raise ValueError(f"mesh[{i}].material: unknown material '{m.material}'; defined materials: {known}")
+            if m.reflector and self.materials[m.material].type != "mirror":
+                raise ValueError(
+                    f"mesh[{i}].reflector: a reflector needs a material of type \"mirror\", "
+                    f"'{m.material}' is \"{self.materials[m.material].type}\""
+                )
         envs = [light for light in self.light if isinstance(light, EnvironmentLight)]
         if len(envs) > 1:
             raise ValueError("light: at most one environment light is allowed")

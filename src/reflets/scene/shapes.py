@@ -215,8 +215,8 @@ def cube(size: float | tuple[float, float, float] = 1.0) -> MeshData:
     return _mesh(pos, n * ones, t * ones, 1.0, np.broadcast_to(uv, (6, 4, 2)), idx)
 
 
-def cylinder(radius: float = 1.0, height: float = 2.0, segments: int = 128) -> MeshData:
-    """A closed cylinder along the y axis, centred at the origin, y ∈ [-h/2, h/2].
+def cylinder(radius: float = 1.0, height: float = 2.0, segments: int = 128, caps: bool = True) -> MeshData:
+    """A cylinder along the y axis, centred at the origin, y ∈ [-h/2, h/2], closed unless ``caps`` is False.
 
     Parameters
     ----------
@@ -240,7 +240,9 @@ def cylinder(radius: float = 1.0, height: float = 2.0, segments: int = 128) -> M
     tan = np.stack([np.cos(phi), np.zeros_like(phi), -np.sin(phi)], axis=-1)
     pos = r * nrm + (0.5 - v)[..., None] * h * np.array([0, 1, 0])
     side = _mesh(pos, nrm, tan, -1.0, np.stack([u, v], -1), _grid_indices(n, 1, flip=True))
-    caps = []
+    if not caps:
+        return side
+    discs = []
     for sign in (1.0, -1.0):
         phi_c = 2.0 * np.pi * np.arange(n) / n
         ring = np.stack([np.sin(phi_c), np.zeros(n), np.cos(phi_c)], axis=-1)
@@ -252,8 +254,8 @@ def cylinder(radius: float = 1.0, height: float = 2.0, segments: int = 128) -> M
         # Rim order 1..n goes counter-clockwise about +y, so the fan is CCW from above for the top cap.
         fan = np.stack([np.zeros(n, int), k, nxt] if sign > 0 else [np.zeros(n, int), nxt, k], axis=1)
         ones = np.ones((n + 1, 1))
-        caps.append(_mesh(cpos, ones * [0, sign, 0], ones * [1, 0, 0], 1.0, cuv, fan))
-    return _merge(side, *caps)
+        discs.append(_mesh(cpos, ones * [0, sign, 0], ones * [1, 0, 0], 1.0, cuv, fan))
+    return _merge(side, *discs)
 
 
 def torus(major: float = 1.0, minor: float = 0.25, segments: tuple[int, int] = DEFAULT_SEGMENTS) -> MeshData:

@@ -28,6 +28,7 @@ from ..errors import ArgumentError
 from ..gpu import FrameTimer, HDRTarget, ProgramSpec, get_program, set_uniforms
 from ..scene.environment import environment_grid, load_environment, rotation_y
 from ..scene.geometry import clip_planes, mesh_data
+from ..scene.lightmask import load_mask, mask_lookup
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
 from .base import Technique, TechniqueParams, register_technique
@@ -211,10 +212,18 @@ class Forward(Technique):
         """Rows of the area-sample buffer (binding 2) for one area light: the midpoint rule here."""
         poly = light.polygon()
         nl = polygon_normal(poly)
-        pts, dA = area_light_samples(poly, self.params.area_samples)
+        n = self.params.area_samples
+        pts, dA = area_light_samples(poly, n)
+        weight = np.ones(len(pts))
+        mask = load_mask(self.scene, next(i for i, x in enumerate(self.scene.light) if x is light))
+        if mask is not None:  # a quad: the n × n grid in area_light_samples' order; masked-out samples dropped
+            t = (np.arange(n) + 0.5) / n
+            u, v = np.meshgrid(t, t, indexing="xy")
+            weight = mask_lookup(mask, u.ravel(), v.ravel())
         rows = []
-        for y, a in zip(pts, dA, strict=True):
-            rows += [(*y, a), (*nl, float(light.two_sided)), (*light.radiance, 0.0)]
+        for y, a, m in zip(pts, dA, weight, strict=True):
+            if m > 0.0:
+                rows += [(*y, a), (*nl, float(light.two_sided)), (*(m * np.asarray(light.radiance)), 0.0)]
         return rows
 
     def polygon_rows(self, scene: Scene) -> list[tuple]:

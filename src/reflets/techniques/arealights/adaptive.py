@@ -103,6 +103,7 @@ class Adaptive(AreaLightTechnique):
     summary: ClassVar[str] = "area lights: midpoint grid with predicted per-pixel step (Meunier 2007 §2.4)"
     Params: ClassVar = AdaptiveParams
     area_glsl: ClassVar[str] = SHADERS + "adaptive.glsl"
+    supports_masks: ClassVar[bool] = True
 
     def method_uniforms(self) -> dict[str, object]:
         p = self.params

@@ -9,7 +9,16 @@ other objects** (the unoccluded assumption); compare them with ``reflets.referen
 Polygon-light record: 16 vec4 per light —
   [0] radiance.rgb, two_sided   [1] c1.xyz, vertex count   [2] e1 = c2 − c1, is_parallelogram
   [3] e2 = c4 − c1, area        [4] emitting normal, width |e1|   [5..12] vertices (counter-clockwise seen
-  from the emitting side)       [13..15] reserved
+  from the emitting side)       [13] mask: texel offset, width W, height H, 1 (all 0: no mask)
+  [14..15] reserved
+
+Quad-light masks (``QuadLight.mask``) go to one float SSBO at binding 5 (``MASK_BINDING``), each mask's
+W × H texels row by row from v = 0, compiled in only when the scene has one (flag ``LIGHT_MASKS``). A buffer
+rather than a ``sampler2DArray``: every mask keeps its own size, so the nearest texel the GPU fetches is
+the texel the references read (an array texture needs one common size, and resampling to it moves the cell
+edges unless the size is a common multiple), and no texture unit is taken from the materials. Offsets are
+float32 in the record: at most 2²⁴ texels in all. Methods that honour masks set ``supports_masks``; the
+others refuse a masked scene rather than ignore the mask.
 """
 
 from __future__ import annotations
@@ -19,20 +28,23 @@ from typing import ClassVar
 import numpy as np
 from pydantic import Field
 
-from ...errors import ArgumentError
+from ...errors import ArgumentError, SceneError
 from ...gpu import ProgramSpec
+from ...scene.lightmask import load_masks
 from ...scene.model import PolygonLight, QuadLight, Scene
 from ..forward import LIGHT_FLAGS, Forward, ForwardParams, polygon_normal
 
 SHADERS = "reflets/techniques/arealights/shaders/"
 POLY_STRIDE = 16
 MAX_POLY_VERTICES = 8
+MASK_BINDING = 5
+MAX_MASK_TEXELS = 1 << 24  # offsets travel as float32
 
 AREA_PROGRAM = ProgramSpec(
     "arealight",
     vertex="reflets/techniques/shaders/mesh.vert",
     fragment=SHADERS + "arealight.frag",
-    flags=frozenset({"OUTPUT", "METHOD_VARIANT", "N_POLYGONS"}) | LIGHT_FLAGS,
+    flags=frozenset({"OUTPUT", "METHOD_VARIANT", "N_POLYGONS", "LIGHT_MASKS"}) | LIGHT_FLAGS,
 )
 
 
@@ -42,8 +54,9 @@ class AreaLightParams(ForwardParams):
     output: str = Field("radiance", pattern="^(radiance|position|normal|uv|samples)$")
 
 
-def polygon_record(light: QuadLight | PolygonLight) -> list[tuple]:
-    """The 16 rows of one light's record in the polygon buffer (layout in the module docstring)."""
+def polygon_record(light: QuadLight | PolygonLight, mask: tuple[int, int, int] | None = None) -> list[tuple]:
+    """The 16 rows of one light's record in the polygon buffer (layout in the module docstring); ``mask`` =
+    (texel offset, W, H) in the mask buffer."""
     poly = light.polygon()
     if len(poly) > MAX_POLY_VERTICES:
         raise ArgumentError(
@@ -61,8 +74,9 @@ def polygon_record(light: QuadLight | PolygonLight) -> list[tuple]:
         (*e2, float(sum(fan))),
         (*normal, float(np.linalg.norm(e1))),
     ]
-    rows += [(*p, 0.0) for p in poly] + [(0.0, 0.0, 0.0, 0.0)] * (POLY_STRIDE - 5 - len(poly))
-    return rows
+    rows += [(*p, 0.0) for p in poly] + [(0.0, 0.0, 0.0, 0.0)] * (13 - 5 - len(poly))
+    rows.append((*(float(k) for k in mask), 1.0) if mask is not None else (0.0, 0.0, 0.0, 0.0))
+    return rows + [(0.0, 0.0, 0.0, 0.0)] * (POLY_STRIDE - 14)
 
 
 def lobe_info(material) -> dict[str, object]:
@@ -100,6 +114,8 @@ class AreaLightTechnique(Forward):
     program_spec: ClassVar[ProgramSpec] = AREA_PROGRAM
     #: package path of the method's GLSL file (defines area_light_contribution)
     area_glsl: ClassVar[str]
+    #: does the method's GLSL honour quad-light masks (``light_mask`` in polygon.glsl)?
+    supports_masks: ClassVar[bool] = False
 
     def slots(self, material) -> dict[str, str]:
         return {"BRDF": material.glsl, "AREA": self.area_glsl}
@@ -128,11 +144,45 @@ class AreaLightTechnique(Forward):
         return []  # no midpoint samples: the method integrates the polygons itself
 
     def polygon_rows(self, scene: Scene) -> list[tuple]:
-        rows = []
-        for light in scene.light:
-            if isinstance(light, QuadLight | PolygonLight):
-                rows += polygon_record(light)
+        rows, texels, offset = [], [], 0
+        masks = load_masks(scene)
+        for i, light in enumerate(scene.light):
+            if not isinstance(light, QuadLight | PolygonLight):
+                continue
+            slot = None
+            if i in masks:
+                if not self.supports_masks:
+                    raise SceneError(
+                        f"supported by {', '.join(mask_methods())}; not by {self.name}", field=f"light[{i}].mask"
+                    )
+                h, w = masks[i].shape
+                slot, offset = (offset, w, h), offset + w * h
+                texels.append(masks[i].ravel())
+            rows += polygon_record(light, slot)
+        if offset > MAX_MASK_TEXELS:
+            raise SceneError(f"the masks hold {offset} texels in all; at most {MAX_MASK_TEXELS}", field="light.mask")
+        self._mask_texels = np.concatenate(texels).astype(np.float32) if texels else None
         return rows
 
     def extra_light_flags(self, polygon_rows: list[tuple]) -> dict[str, int]:
-        return {"N_POLYGONS": len(polygon_rows) // POLY_STRIDE}
+        return {"N_POLYGONS": len(polygon_rows) // POLY_STRIDE, "LIGHT_MASKS": int(self._mask_texels is not None)}
+
+    def prepare(self, scene: Scene) -> None:
+        super().prepare(scene)
+        self._mask_buffer = None
+        if self._mask_texels is not None:
+            self._mask_buffer = self.ctx.buffer(self._mask_texels.tobytes())
+            self._objects.append(self._mask_buffer)
+
+    def _draw(self, *args, **kwargs) -> None:
+        if getattr(self, "_mask_buffer", None) is not None:
+            self._mask_buffer.bind_to_storage_buffer(MASK_BINDING)
+        super()._draw(*args, **kwargs)
+
+
+def mask_methods() -> list[str]:
+    """The methods that honour quad-light masks: ``forward`` (its midpoint samples carry them) and the
+    area-light methods with ``supports_masks``."""
+    from ..base import TECHNIQUES
+
+    return ["forward"] + [n for n, t in TECHNIQUES.items() if getattr(t, "supports_masks", False)]

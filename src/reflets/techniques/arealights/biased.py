@@ -123,6 +123,7 @@ class Biased(AreaLightTechnique):
     summary: ClassVar[str] = "area lights: constant grid over the lobe's cone ∩ light (Meunier 2007 §2.5)"
     Params: ClassVar = BiasedParams
     area_glsl: ClassVar[str] = SHADERS + "biased.glsl"
+    supports_masks: ClassVar[bool] = True
 
     def method_uniforms(self) -> dict[str, object]:
         return {"a_grid": int(self.params.grid), "a_box": {"ellipse": 0, "document": 1, "union": 2}[self.params.box]}

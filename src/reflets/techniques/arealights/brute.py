@@ -62,6 +62,7 @@ class Brute(AreaLightTechnique):
     summary: ClassVar[str] = "area lights: brute-force n×n midpoint grid per light (Meunier 2007 §2.3)"
     Params: ClassVar = BruteParams
     area_glsl: ClassVar[str] = SHADERS + "brute.glsl"
+    supports_masks: ClassVar[bool] = True
 
     def method_uniforms(self) -> dict[str, object]:
         return {"a_grid": int(self.params.grid)}

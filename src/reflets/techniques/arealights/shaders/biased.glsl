@@ -1,6 +1,7 @@
 // Provides area_light_contribution() for the "biased" method (§2.5 of the area-light document): the diffuse
 // term exactly (Lambert's polygon formula, polygon.glsl), the rest of the BRDF by a constant a_grid × a_grid
 // midpoint grid over the part of the light inside the cone of useful directions around the mirror direction.
+// Masked quad lights (LIGHT_MASKS): the diffuse part on a whole-light grid instead of the exact formula.
 #include "reflets/techniques/arealights/shaders/grid.glsl"
 
 uniform int a_grid;            // n: n × n samples over the box
@@ -65,7 +66,19 @@ vec3 area_light_contribution(int i, vec3 x, mat3 frame, vec3 wo) {
     AreaLight L = area_light(i);
     if (wo.z <= 0.0 || !area_light_faces(L, x)) return vec3(0.0);
     vec3 diffuse = u_lobe_diffuse * INV_PI;
-    vec3 result = diffuse * L.radiance * polygon_irradiance(i, x, frame);
+    vec3 result;
+#if LIGHT_MASKS
+    if (L.masked) {
+        // Lambert's polygon formula needs constant radiance: a masked light's diffuse part (the whole BRDF
+        // when there is no lobe) goes on an a_grid² grid over the whole light instead, the mask per sample.
+        if (u_lobe_kind == 0)
+            return grid_parallelogram(L, x, frame, wo, vec2(0.0), vec2(1.0), a_grid, a_grid, vec3(0.0));
+        result = vec3(0.0);
+        if (any(greaterThan(diffuse, vec3(0.0))))
+            result = grid_parallelogram(L, x, frame, wo, vec2(0.0), vec2(1.0), a_grid, a_grid, diffuse, false);
+    } else
+#endif
+    result = diffuse * L.radiance * polygon_irradiance(i, x, frame);
     if (u_lobe_kind == 0) return result;
     // The grids integrate f − ρ_d/π (the diffuse term is already exact).
     if (!L.parallelogram) return result + grid_fan(i, L, x, frame, wo, a_grid, diffuse);

@@ -1,6 +1,10 @@
 // Provides polygon area lights (std430 binding 4, layout in techniques/arealights/base.py), horizon clipping
 // and the exact Lambert edge integral shared by the area-light methods; g_samples counts light samples.
+// LIGHT_MASKS: quad-light mask textures (binding 5, base.py), nearest texel, fetched by light_mask().
 layout(std430, binding = 4) readonly buffer PolygonLights { vec4 poly_data[]; };
+#if LIGHT_MASKS
+layout(std430, binding = 5) readonly buffer LightMasks { float mask_data[]; };
+#endif
 
 const int POLY_STRIDE = 16;
 const int MAX_POLY_VERTICES = 8;
@@ -17,6 +21,11 @@ struct AreaLight {
     float area;
     vec3 normal;     // emitting normal, normalize(e1 x e2) for quads
     float width;     // |e1|, the document's light width
+#if LIGHT_MASKS
+    bool masked;
+    int mask_offset; // first texel in mask_data (row v = 0 first)
+    ivec2 mask_size; // W, H
+#endif
 };
 
 AreaLight area_light(int i) {
@@ -32,8 +41,23 @@ AreaLight area_light(int i) {
     L.area = poly_data[b + 3].w;
     L.normal = poly_data[b + 4].xyz;
     L.width = poly_data[b + 4].w;
+#if LIGHT_MASKS
+    vec4 m = poly_data[b + 13];
+    L.masked = m.w > 0.5;
+    L.mask_offset = int(m.x + 0.5);
+    L.mask_size = ivec2(m.yz + 0.5);
+#endif
     return L;
 }
+
+#if LIGHT_MASKS
+// Mask value at (u, v) of a masked parallelogram light: the nearest texel, clamped at the edges (the same
+// cells as scene/lightmask.py's mask_lookup).
+float light_mask(AreaLight L, vec2 uv) {
+    ivec2 t = clamp(ivec2(floor(uv * vec2(L.mask_size))), ivec2(0), L.mask_size - 1);
+    return mask_data[L.mask_offset + t.y * L.mask_size.x + t.x];
+}
+#endif
 
 vec3 area_vertex(int i, int k) { return poly_data[i * POLY_STRIDE + 5 + k].xyz; }
 

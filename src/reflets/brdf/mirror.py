@@ -1,0 +1,87 @@
+"""Smooth mirror: a delta reflection (constant reflectance or exact conductor Fresnel) plus an optional
+Lambertian part.
+
+The delta lobe has no finite BRDF value, so ``eval`` (and the GLSL twin) return only the Lambertian part:
+every technique that does not trace reflections shows a mirror's non-specular part, and the techniques that
+do (``fermat``, the reference's mirror bounce) weight the reflected radiance by ``reflectance(cos)``.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from .base import RGB, Material, Reflectance, register_material, upper
+from .fresnel import GOLD_ETA, GOLD_K, fresnel_conductor
+
+Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+
+
+@register_material
+class Mirror(Material):
+    """Perfectly smooth reflector (for ``reflector = true`` meshes).
+
+    Parameters
+    ----------
+    reflectance : [r, g, b] in [0, 1], default [1, 1, 1]
+        Constant specular reflectance (``fresnel = "none"``).
+    fresnel : "none" | "conductor", default "none"
+        "conductor": exact reflectance of the complex index eta + i k per RGB channel instead of
+        ``reflectance`` (it rises to 1 at grazing incidence).
+    eta, k : [r, g, b], default gold
+        Complex index of refraction of a conductor (only with ``fresnel = "conductor"``).
+    diffuse : [r, g, b] in [0, 1], default [0, 0, 0]
+        Optional Lambertian part, f = diffuse/π: the only finite part of the BRDF. With a constant
+        reflectance, diffuse + reflectance must not exceed 1 per channel.
+    """
+
+    type: Literal["mirror"] = "mirror"
+    reflectance: Reflectance = (1.0, 1.0, 1.0)
+    fresnel: Literal["none", "conductor"] = "none"
+    eta: tuple[Positive, Positive, Positive] | None = None
+    k: RGB | None = None
+    diffuse: Reflectance = (0.0, 0.0, 0.0)
+    glsl = "reflets/brdf/glsl/mirror.glsl"
+
+    @model_validator(mode="after")
+    def _check(self) -> Mirror:
+        if (self.eta is not None or self.k is not None) and self.fresnel != "conductor":
+            raise ValueError('eta and k apply only to fresnel = "conductor"')
+        if self.fresnel == "conductor" and (self.eta is None) != (self.k is None):
+            raise ValueError('fresnel = "conductor" takes both eta and k, or neither (gold)')
+        total = np.add(self.diffuse, self.reflectance)
+        if self.fresnel == "none" and np.any(total > 1.0 + 1e-9):
+            raise ValueError(f"diffuse + reflectance exceeds 1 ({self.diffuse} + {self.reflectance})")
+        return self
+
+    @property
+    def eta_rgb(self) -> tuple[float, float, float]:
+        return tuple(self.eta) if self.eta is not None else GOLD_ETA
+
+    @property
+    def k_rgb(self) -> tuple[float, float, float]:
+        return tuple(self.k) if self.k is not None else GOLD_K
+
+    def specular_reflectance(self, cos: np.ndarray) -> np.ndarray:
+        """Weight of the mirror-reflected radiance at incidence cosine ``cos``, shape (..., 3)."""
+        c = np.asarray(cos, dtype=np.float64)[..., None]
+        if self.fresnel == "conductor":
+            return fresnel_conductor(c, self.eta_rgb, self.k_rgb)
+        return np.broadcast_to(np.asarray(self.reflectance, dtype=np.float64), c.shape[:-1] + (3,))
+
+    def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        f = np.broadcast_to(np.asarray(self.diffuse) / np.pi, np.shape(wo)[:-1] + (3,))
+        return np.where(upper(wo, wi), f, 0.0)
+
+    def uniforms(self) -> dict[str, object]:
+        return {
+            "m_diffuse": tuple(self.diffuse),
+            "m_reflectance": tuple(self.reflectance),
+            "m_eta": self.eta_rgb,
+            "m_k": self.k_rgb,
+        }
+
+    def flags(self) -> dict[str, object]:
+        return {"BRDF_MIRROR_CONDUCTOR": int(self.fresnel == "conductor")}

@@ -1,0 +1,48 @@
+// Provides the reflected scene's fragments: visibility level 2 — the fragment must lie on this reflector's visible
+// pixels (an exact id test, which also rejects what linear interpolation spills past the silhouette), its
+// reflection point must not be behind the visible reflector surface (reflections on the hidden side), and the
+// object point must lie in front of the mirror there (no reflection through the reflector) — then shading with
+// the eye at the reflection point P (view-dependent materials look right in the mirror). REFLECTED_EMITTER: an
+// area light.
+#if !REFLECTED_EMITTER
+#include BRDF
+#include "reflets/techniques/shaders/lights.glsl"
+#endif
+
+in vec3 v_position;
+in vec3 v_normal;
+in vec4 v_tangent;
+in vec2 v_uv;
+in vec3 v_mirror_point;
+in float v_valid;
+
+uniform sampler2D u_gbuffer_position;
+uniform sampler2D u_gbuffer_normal;
+uniform float u_reflector_id;
+uniform vec3 u_eye;
+uniform float u_hidden_tolerance;  // world distance P may lie behind the visible surface (chord sag)
+#if REFLECTED_EMITTER
+uniform vec3 u_radiance;
+uniform bool u_two_sided;
+#endif
+
+out vec4 f_color;
+
+void main() {
+    if (v_valid < 0.9999) discard;  // a vertex without a valid reflection: the whole triangle goes
+    vec4 g = texelFetch(u_gbuffer_position, ivec2(gl_FragCoord.xy), 0);
+    if (abs(g.w - u_reflector_id) > 0.5) discard;
+    if (length(v_mirror_point - u_eye) > length(g.xyz - u_eye) + u_hidden_tolerance) discard;
+    if (dot(texelFetch(u_gbuffer_normal, ivec2(gl_FragCoord.xy), 0).xyz, v_position - g.xyz) <= 0.0) discard;
+    vec3 to_eye = v_mirror_point - v_position;
+#if REFLECTED_EMITTER
+    bool front = dot(v_normal, to_eye) > 0.0;
+    f_color = vec4((front || u_two_sided) ? u_radiance : vec3(0.0), 1.0);
+#else
+    vec3 n = normalize(v_normal);
+    if (dot(n, to_eye) < 0.0) n = -n;  // two-sided surfaces, as seen from P
+    mat3 frame = shading_frame(n, v_tangent);
+    vec3 wo = transpose(frame) * normalize(to_eye);
+    f_color = vec4(direct_lighting(v_position, frame, wo), 1.0);
+#endif
+}
