@@ -35,8 +35,10 @@ import moderngl
 import numpy as np
 from pydantic import Field
 
-from ...errors import ArgumentError, SceneError
+from ...errors import ArgumentError
 from ...gpu import ProgramSpec, get_program, set_uniforms
+from ...reflections.scene import canonical_surface
+from ...reflections.surfaces import SampledSurface
 from ...scene.geometry import bounding_sphere, mesh_data
 from ...scene.meshdata import MeshData
 from ...scene.model import CylinderMesh, PlaneMesh, PolygonLight, QuadLight, Scene, SphereMesh, TorusMesh
@@ -66,36 +68,78 @@ POINTS_PROGRAM = ProgramSpec(
     varyings=("t_position", "t_normal", "t_valid", "t_residual", "t_iterations"),
 )
 #: SURFACE_KIND values of solver.glsl
-SURFACE_KINDS = {"sphere": 1, "torus": 2, "cylinder": 3, "plane": 4}
+SURFACE_KINDS = {"sphere": 1, "torus": 2, "cylinder": 3, "plane": 4, "sampled": 5}
 SOLVERS = {"robust": 0, "document": 1}
 DEFAULT_ITERATIONS = {"robust": 8, "document": 5}
 #: texture units of the G-buffer and reflection images (materials use 1…, the environment 0)
 GBUFFER_UNITS = (12, 13, 14)
+#: texture unit of a sampled reflector's node grid
+GRID_UNIT = 15
+
+
+#: the coarse grid of the segment hit on sampled reflectors (NumPy twin: SampledSurface.hit_grid)
+SAMPLED_HIT_GRID = 8
+#: node grid of a reflector sampled into a texture when the scene does not say
+DEFAULT_SAMPLES = 64
 
 
 @dataclass(frozen=True)
 class Reflector:
-    """One reflector mesh as the solver sees it: canonical shape (kind, parameters) and world transform x → A x + t."""
+    """One reflector mesh as the solver sees it: canonical shape (kind, parameters, or a sampled grid) and
+    world transform x → A x + t."""
 
     index: int
     kind: str
     params: tuple[float, float, float, float]
     linear: np.ndarray
     offset: np.ndarray
+    sampled: SampledSurface | None = None
 
     def uniforms(self) -> dict[str, object]:
-        return {
+        out = {
             "r_linear": self.linear.T.astype(np.float32).tobytes(),  # column-major
             "r_inverse": np.linalg.inv(self.linear).T.astype(np.float32).tobytes(),
             "r_offset": tuple(float(c) for c in self.offset),
             "r_params": self.params,
         }
+        if self.sampled is not None:
+            s = self.sampled
+            out.update(
+                {
+                    "r_nodes": (int(s.positions.shape[1]), int(s.positions.shape[0])),
+                    "r_periodic": tuple(int(p) for p in s.periodic),
+                    "r_interior": tuple(float(c) for c in s.interior),
+                    "r_orientation": float(s.orientation),
+                    "r_hit_grid": int(s.hit_grid),
+                }
+            )
+        return out
+
+    def grid_texture(self, ctx):
+        """The padded node grid (GridInterpolator's) as an RGB float texture, or None for analytic kinds."""
+        if self.sampled is None:
+            return None
+        grid = np.ascontiguousarray(self.sampled._f.grid, dtype=np.float32)  # (n_v + 3, n_u + 3, 3)
+        texture = ctx.texture((grid.shape[1], grid.shape[0]), 3, grid.tobytes(), dtype="f4")
+        texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        return texture
 
 
-def reflector_of(scene: Scene, index: int) -> Reflector:
-    """The parametric surface of ``scene.mesh[index]`` (a clear error for shapes the solver cannot handle)."""
+def sampled_surface(surface, samples: int) -> SampledSurface:
+    """A canonical surface sampled on ``samples``² nodes as the GPU stores it (bicubic, coarse hit grid)."""
+    out = SampledSurface.from_surface(surface, samples, "bicubic")
+    out.hit_grid = SAMPLED_HIT_GRID
+    return out
+
+
+def reflector_of(scene: Scene, index: int, samples: int | None = None) -> Reflector:
+    """The parametric surface of ``scene.mesh[index]``: analytic for sphere, torus, cylinder and plane unless
+    ``samples`` asks for a sampled texture; sampled for every other shape reflets.reflections knows (Bézier
+    and height-field patches); a clear error otherwise."""
     mesh = scene.mesh[index]
     m = mesh.transform.matrix()
+    linear, offset = m[:3, :3].copy(), m[:3, 3].copy()
+    params = None
     if isinstance(mesh, SphereMesh):
         kind, params = "sphere", (mesh.radius, 0.0, 0.0, 0.0)
     elif isinstance(mesh, TorusMesh):
@@ -104,12 +148,11 @@ def reflector_of(scene: Scene, index: int) -> Reflector:
         kind, params = "cylinder", (mesh.radius, mesh.height, 0.0, 0.0)
     elif isinstance(mesh, PlaneMesh):
         kind, params = "plane", (mesh.size[0], mesh.size[1], 0.0, 0.0)
-    else:
-        raise SceneError(
-            "reflector shapes are sphere (any transform: ellipsoids), torus, cylinder (caps = false) and plane",
-            field=f"mesh[{index}].shape",
-        )
-    return Reflector(index, kind, tuple(float(p) for p in params), m[:3, :3].copy(), m[:3, 3].copy())
+    if params is None or samples is not None:
+        surface = canonical_surface(mesh, index)  # the scene error for shapes no surface describes
+        grid = sampled_surface(surface, samples or DEFAULT_SAMPLES)
+        return Reflector(index, "sampled", (0.0, 0.0, 0.0, 0.0), linear, offset, grid)
+    return Reflector(index, kind, tuple(float(p) for p in params), linear, offset)
 
 
 def emitter_mesh(light: QuadLight | PolygonLight) -> MeshData:
@@ -141,6 +184,13 @@ class FermatParams(ForwardParams):
         "that makes every triangle span at most max_angle seen from the reflector",
     )
     max_angle: float = Field(4.0, gt=0.0, le=90.0, description="subdivide = auto: degrees per reflected triangle")
+    sampled: int | None = Field(
+        None,
+        ge=4,
+        le=1024,
+        description="solve on every reflector sampled into an N×N float texture (bicubic) instead of its analytic "
+        "form; Bézier and height-field reflectors are always sampled (64² unless given)",
+    )
     hidden_tolerance: float = Field(
         0.02, ge=0.0, le=1.0, description="how far (× the reflector's radius) P may lie behind the visible surface"
     )
@@ -157,7 +207,11 @@ class Fermat(Forward):
     def prepare(self, scene: Scene) -> None:
         super().prepare(scene)
         ctx = self.ctx
-        self._reflectors = [reflector_of(scene, i) for i, mesh in enumerate(scene.mesh) if mesh.reflector]
+        self._reflectors = [
+            reflector_of(scene, i, self.params.sampled) for i, mesh in enumerate(scene.mesh) if mesh.reflector
+        ]
+        self._grids = [r.grid_texture(ctx) for r in self._reflectors]
+        self._objects += [g for g in self._grids if g is not None]
         if not self._reflectors:
             raise ArgumentError(
                 "the fermat method needs a mesh with reflector = true (and a mirror material)", field="mesh"
@@ -306,7 +360,10 @@ class Fermat(Forward):
             reflection_fbo.use()
             ctx.viewport = (0, 0, *target.size)
             reflection_fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+            if self._grids[k] is not None:
+                self._grids[k].use(GRID_UNIT)
             common = {
+                "r_grid": GRID_UNIT,
                 "u_view_proj": vp_bytes,
                 "u_eye": eye,
                 "u_depth_range": self._depth_range,
@@ -369,7 +426,9 @@ class Fermat(Forward):
         fbo = ctx.simple_framebuffer((1, 1))  # a draw needs a complete framebuffer, even with nothing rasterised
         try:
             fbo.use()
-            set_uniforms(program, r.uniforms())
+            if self._grids[reflector] is not None:
+                self._grids[reflector].use(GRID_UNIT)
+            set_uniforms(program, {**r.uniforms(), "r_grid": GRID_UNIT})
             vao.transform(out, mode=moderngl.POINTS, vertices=len(vertices))
             result = np.frombuffer(out.read(), dtype=np.float32).reshape(-1, 9).astype(np.float64)
         finally:

@@ -2,7 +2,7 @@
 // the stationary point of d(u, v) = |E − f| + |V − f| (Fermat). GLSL twin of reflets/reflections/solver.py
 // (solve_robust, solve_document) on the surfaces of reflets/reflections/surfaces.py; the tests compare them.
 //
-// Flags: SURFACE_KIND (1 sphere, 2 torus, 3 open cylinder, 4 plane), SOLVER (0 robust: safeguarded Newton with
+// Flags: SURFACE_KIND (1 sphere, 2 torus, 3 open cylinder, 4 plane, 5 sampled into a texture), SOLVER (0 robust: safeguarded Newton with
 // the analytic Hessian in a local chart; 1 document: the triangle secant of §3.3), ITERATIONS, COUNT_ITERATIONS
 // (1: record after how many iterations the residual fell below FERMAT_TOL — a residual per iteration, so only
 // the read-back program pays for it).
@@ -35,6 +35,8 @@ struct FermatResult {
 // Each kind provides, in canonical space: surface_interior (the point O), surface_hit (global (u, v) where the
 // segment P → O first meets the surface), chart_setup (the chart around A and B, and their coordinates in it),
 // chart_from_uv, chart_clamp, chart_eval (f and its first and second derivatives) and chart_normal.
+
+bool finite(float x) { return !(isnan(x) || isinf(x)); }
 
 // periodic coordinates of global (u, v) taken nearest the middle of A and B (Chart._near_middle)
 vec2 near_middle(vec2 x, vec2 a, vec2 b, bvec2 periodic) {
@@ -248,6 +250,142 @@ void chart_eval(vec2 x, out vec3 f, out vec3 fu, out vec3 fv, out vec3 fuu, out 
 }
 
 vec3 chart_normal(vec2 x, vec3 f, vec3 fu, vec3 fv) { return vec3(0.0, 1.0, 0.0); }
+#elif SURFACE_KIND == 5
+// A reflector sampled into a float texture (surfaces.SampledSurface, bicubic): node grid padded with one ghost
+// node before and two after (wrapped, or linearly extrapolated on clamped edges), Catmull–Rom on the 4×4
+// stencil, so f is C1 and the Fermat gradient continuous (GridInterpolator). Any analytic reflector can be
+// solved this way (sampled = N), and Bézier / height-field patches always are. The global chart, B unwrapped;
+// A and B by the generic segment hit (coarse grid search, then Newton on f(u, v) = P + t (O − P)).
+uniform sampler2D r_grid;      // (n_u + 3) × (n_v + 3) texels: canonical positions
+uniform ivec2 r_nodes;         // n_u, n_v
+uniform ivec2 r_periodic;      // 1 where the direction wraps
+uniform vec3 r_interior;       // O, canonical
+uniform float r_orientation;   // normal = orientation · unit(f_u × f_v)
+uniform int r_hit_grid;        // coarse grid of the segment hit
+
+vec4 catmull_rom(float t, int order) {
+    if (order == 0) return 0.5 * vec4(-t + 2.0 * t * t - t * t * t, 2.0 - 5.0 * t * t + 3.0 * t * t * t,
+                                      t + 4.0 * t * t - 3.0 * t * t * t, -t * t + t * t * t);
+    if (order == 1) return 0.5 * vec4(-1.0 + 4.0 * t - 3.0 * t * t, -10.0 * t + 9.0 * t * t,
+                                      1.0 + 8.0 * t - 9.0 * t * t, -2.0 * t + 3.0 * t * t);
+    return 0.5 * vec4(4.0 - 6.0 * t, -10.0 + 18.0 * t, 8.0 - 18.0 * t, -2.0 + 6.0 * t);
+}
+
+// cell index in the padded grid, fraction, d(grid coordinate)/d(parameter)
+void grid_cell(float x, int n, bool periodic, out int i, out float t, out float s) {
+    if (periodic) {
+        float g = x * float(n);
+        float f = floor(g);
+        i = int(f - float(n) * floor(f / float(n)));
+        t = g - f;
+        s = float(n);
+    } else {
+        float g = clamp(x, 0.0, 1.0) * float(n - 1);
+        float f = min(floor(g), float(n - 2));
+        i = int(f);
+        t = g - f;
+        s = float(n - 1);
+    }
+}
+
+vec3 chart_eval_order(vec2 x, int order, out vec3 fu, out vec3 fv, out vec3 fuu, out vec3 fuv, out vec3 fvv) {
+    int iu, iv;
+    float tu, tv, su, sv;
+    grid_cell(x.x, r_nodes.x, r_periodic.x == 1, iu, tu, su);
+    grid_cell(x.y, r_nodes.y, r_periodic.y == 1, iv, tv, sv);
+    vec4 wu0 = catmull_rom(tu, 0), wu1 = catmull_rom(tu, 1), wu2 = catmull_rom(tu, 2);
+    vec4 wv0 = catmull_rom(tv, 0), wv1 = catmull_rom(tv, 1), wv2 = catmull_rom(tv, 2);
+    vec3 f = vec3(0.0);
+    fu = fv = fuu = fuv = fvv = vec3(0.0);
+    for (int j = 0; j < 4; ++j) {
+        vec3 r0 = vec3(0.0), r1 = vec3(0.0), r2 = vec3(0.0);
+        for (int i = 0; i < 4; ++i) {
+            vec3 node = texelFetch(r_grid, ivec2(iu + i, iv + j), 0).xyz;
+            r0 += wu0[i] * node;
+            r1 += wu1[i] * node;
+            r2 += wu2[i] * node;
+        }
+        f += wv0[j] * r0;
+        fu += wv0[j] * r1;
+        fv += wv1[j] * r0;
+        fuu += wv0[j] * r2;
+        fuv += wv1[j] * r1;
+        fvv += wv2[j] * r0;
+    }
+    fu *= su;
+    fv *= sv;
+    fuu *= su * su;
+    fuv *= su * sv;
+    fvv *= sv * sv;
+    return f;
+}
+
+vec2 chart_clamp(vec2 x) {
+    return vec2(r_periodic.x == 1 ? x.x : clamp(x.x, 0.0, 1.0), r_periodic.y == 1 ? x.y : clamp(x.y, 0.0, 1.0));
+}
+
+void chart_eval(vec2 x, out vec3 f, out vec3 fu, out vec3 fv, out vec3 fuu, out vec3 fuv, out vec3 fvv) {
+    f = chart_eval_order(chart_clamp(x), 2, fu, fv, fuu, fuv, fvv);
+}
+
+vec3 sampled_position(vec2 x) {
+    vec3 fu, fv, fuu, fuv, fvv;
+    return chart_eval_order(chart_clamp(x), 0, fu, fv, fuu, fuv, fvv);
+}
+
+vec3 surface_interior(vec3 E, vec3 V) { return r_interior; }
+
+// Surface.segment_hit: the node of a coarse grid nearest to the segment, then 16 Newton steps (each at most half
+// a coarse cell in (u, v)) on f(u, v) = P + t D (Cramer's rule on [f_u, f_v, −D]).
+vec2 surface_hit(vec3 P, vec3 O) {
+    vec3 D = O - P;
+    float dd = max(dot(D, D), 1e-30);
+    float g = float(r_hit_grid);
+    vec2 best = vec2(0.0);
+    float best_s = 0.0, best_d = 1e30;
+    for (int j = 0; j <= r_hit_grid; ++j) {
+        for (int i = 0; i <= r_hit_grid; ++i) {
+            vec2 x = vec2(float(i), float(j)) / g;
+            vec3 X = sampled_position(x);
+            float s = clamp(dot(X - P, D) / dd, 0.0, 1.0);
+            vec3 r = P + s * D - X;
+            float d2 = dot(r, r);
+            if (d2 < best_d) {
+                best_d = d2;
+                best = x;
+                best_s = s;
+            }
+        }
+    }
+    vec2 x = best;
+    float s = best_s;
+    for (int k = 0; k < 16; ++k) {
+        vec3 f, fu, fv, fuu, fuv, fvv;
+        chart_eval(x, f, fu, fv, fuu, fuv, fvv);
+        vec3 F = f - P - s * D;
+        vec3 c2 = -D;
+        float det = dot(fu, cross(fv, c2));
+        float scale = length(fu) * length(fv) * length(c2);
+        bool ok = abs(det) > 1e-14 * scale && finite(det);
+        vec3 rhs = -F;
+        vec3 step = ok ? vec3(dot(rhs, cross(fv, c2)), dot(fu, cross(rhs, c2)), dot(fu, cross(fv, rhs))) / det : vec3(0.0);
+        float len = length(step.xy);
+        step *= min(1.0, 0.5 / g / max(len, 1e-30));
+        x = chart_clamp(x + step.xy);
+        s = clamp(s + step.z, 0.0, 1.0);
+    }
+    return vec2(r_periodic.x == 1 ? x.x - floor(x.x) : x.x, r_periodic.y == 1 ? x.y - floor(x.y) : x.y);
+}
+
+void chart_setup(vec2 a_uv, vec2 b_uv, out vec2 a, out vec2 b) {
+    a = a_uv;
+    b = vec2(r_periodic.x == 1 ? b_uv.x - floor(b_uv.x - a_uv.x + 0.5) : b_uv.x,
+             r_periodic.y == 1 ? b_uv.y - floor(b_uv.y - a_uv.y + 0.5) : b_uv.y);
+}
+
+vec2 chart_from_uv(vec2 uv, vec2 a, vec2 b) { return near_middle(uv, a, b, bvec2(r_periodic.x == 1, r_periodic.y == 1)); }
+
+vec3 chart_normal(vec2 x, vec3 f, vec3 fu, vec3 fv) { return r_orientation * cross(fu, fv); }
 #endif
 
 // ------------------------------------------------------------------------------------------ world space
@@ -282,8 +420,6 @@ void path_derivatives(ChartPoint p, vec3 E, vec3 V, out vec2 g, out mat2 H) {
     float h11 = -dot(p.fvv, h) + (vv - va * va) / la + (vv - vb * vb) / lb;
     H = mat2(h00, h01, h01, h11);
 }
-
-bool finite(float x) { return !(isnan(x) || isinf(x)); }
 
 FermatResult fermat_result(vec2 x, vec3 E, vec3 V, int iterations) {
     vec3 f, fu, fv, fuu, fuv, fvv;
