@@ -193,3 +193,21 @@ def test_relative_mask_path_resolves_against_the_scene_file(ctx, tmp_path, monke
         }
     )
     assert relative.sum() < 0.6 * reflets.render(plain, method="brute", grid=4).sum()
+
+
+def test_visible_emitter_shows_its_mask(ctx, tmp_path):
+    """Seen from below, a masked two-sided light draws its mask: the forward image of the emitter equals the
+    image of the unmasked half light (same pixels lit, same radiance), as the references draw it."""
+    camera = {"position": [0.0, -2.0, 0.001], "look_at": [0.0, 1.0, 0.0], "fov_y": 60, "size": [64, 48]}
+    base = {"camera": camera, "materials": {"m": LAMBERT}, "mesh": []}
+    mask = half_mask(tmp_path / "half.npy")
+    masked_scene = reflets.load_dict(
+        {
+            **base,
+            "light": [{"type": "quad", "corners": CORNERS, "radiance": [5, 5, 5], "mask": mask, "two_sided": True}],
+        }
+    )
+    half_scene = reflets.load_dict({**base, "light": [{**HALF, "two_sided": True}]})
+    image = reflets.render(masked_scene)
+    assert (image > 0).any()
+    np.testing.assert_array_equal(image, reflets.render(half_scene))

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 from typing import ClassVar, Literal
 
+import moderngl
 import numpy as np
 from pydantic import Field
 
@@ -28,7 +29,7 @@ from ..errors import ArgumentError
 from ..gpu import FrameTimer, HDRTarget, ProgramSpec, get_program, set_uniforms
 from ..scene.environment import environment_grid, load_environment, rotation_y
 from ..scene.geometry import clip_planes, mesh_data
-from ..scene.lightmask import load_mask, mask_lookup
+from ..scene.lightmask import load_mask, load_masks, mask_lookup, quad_uv
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
 from .base import Technique, TechniqueParams, register_technique
@@ -42,7 +43,9 @@ MESH_PROGRAM = ProgramSpec(
     fragment=_SHADERS + "forward.frag",
     flags=frozenset({"OUTPUT"}) | LIGHT_FLAGS,
 )
-EMITTER_PROGRAM = ProgramSpec("emitter", vertex=_SHADERS + "emitter.vert", fragment=_SHADERS + "emitter.frag")
+EMITTER_PROGRAM = ProgramSpec(
+    "emitter", vertex=_SHADERS + "emitter.vert", fragment=_SHADERS + "emitter.frag", flags=frozenset({"EMITTER_MASK"})
+)
 BACKGROUND_PROGRAM = ProgramSpec(
     "background", vertex=_SHADERS + "background.vert", fragment=_SHADERS + "background.frag"
 )
@@ -117,8 +120,8 @@ class Forward(Technique):
         self._objects = []
         points = []  # every mesh vertex and light corner: the clip planes must hold them all
 
-        points_l, dirs, area, emitters = [], [], [], []
-        for light in scene.light:
+        points_l, dirs, area, emitters, emitter_indices = [], [], [], [], []
+        for light_index, light in enumerate(scene.light):
             if isinstance(light, PointLight):
                 points_l += [(*light.position, 1.0), (*light.intensity, 0.0)]
             elif isinstance(light, DirectionalLight):
@@ -129,6 +132,7 @@ class Forward(Technique):
                 points.append(poly)
                 area += self.area_light_rows(light)
                 emitters.append((poly, light))
+                emitter_indices.append(light_index)
         env_image = load_environment(scene)
         env = []
         if env_image is not None:
@@ -162,13 +166,22 @@ class Forward(Technique):
             self._draws.append((program, vao, uniforms, textures))
 
         self._emitters = []
-        emitter_program = get_program(ctx, EMITTER_PROGRAM)
-        for poly, light in emitters:
-            tri = np.array([[poly[0], poly[k], poly[k + 1]] for k in range(1, len(poly) - 1)])
-            vbo = ctx.buffer(tri.astype(np.float32).tobytes())
-            vao = ctx.vertex_array(emitter_program, [(vbo, "3f", "in_position")])
+        masks = load_masks(scene)
+        for index, (poly, light) in zip(emitter_indices, emitters, strict=True):
+            tri = np.array([[poly[0], poly[k], poly[k + 1]] for k in range(1, len(poly) - 1)]).reshape(-1, 3)
+            uv = np.stack(quad_uv(light, tri), axis=-1) if isinstance(light, QuadLight) else np.zeros((len(tri), 2))
+            vbo = ctx.buffer(np.concatenate([tri, uv], axis=1).astype(np.float32).tobytes())
+            program = get_program(ctx, EMITTER_PROGRAM, EMITTER_MASK=int(index in masks))
+            vao = ctx.vertex_array(program, [(vbo, "3f 2f", "in_position", "in_uv")], skip_errors=True)
             self._objects += [vbo, vao]
-            self._emitters.append((vao, light))
+            texture = None
+            if index in masks:
+                mask = masks[index]
+                texture = ctx.texture((mask.shape[1], mask.shape[0]), 1, mask.tobytes(), dtype="f4")
+                texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+                texture.repeat_x = texture.repeat_y = False
+                self._objects.append(texture)
+            self._emitters.append((program, vao, light, texture))
 
         self._background = get_program(ctx, BACKGROUND_PROGRAM)
         self._background_vao = ctx.vertex_array(self._background, [])
@@ -319,14 +332,16 @@ class Forward(Technique):
                 },
             )
             vao.render()
-        emitter_program = get_program(ctx, EMITTER_PROGRAM)
-        for vao, light in self._emitters if self.params.output == "radiance" else []:
+        for emitter_program, vao, light, mask in self._emitters if self.params.output == "radiance" else []:
+            if mask is not None:
+                mask.use(1)
             set_uniforms(
                 emitter_program,
                 {
                     "u_view_proj": vp_bytes,
                     "u_radiance": tuple(light.radiance),
                     "u_two_sided": bool(light.two_sided),
+                    "u_mask": 1,
                 },
             )
             vao.render()

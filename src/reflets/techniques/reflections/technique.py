@@ -40,6 +40,7 @@ from ...gpu import ProgramSpec, get_program, set_uniforms
 from ...reflections.scene import canonical_surface
 from ...reflections.surfaces import SampledSurface
 from ...scene.geometry import bounding_sphere, mesh_data
+from ...scene.lightmask import quad_uv
 from ...scene.meshdata import MeshData
 from ...scene.model import CylinderMesh, PlaneMesh, PolygonLight, QuadLight, Scene, SphereMesh, TorusMesh
 from ..base import register_technique
@@ -53,7 +54,7 @@ REFLECTED_PROGRAM = ProgramSpec(
     "fermat_reflected",
     vertex=SHADERS + "reflected.vert",
     fragment=SHADERS + "reflected.frag",
-    flags=LIGHT_FLAGS | SOLVER_FLAGS | {"REFLECTED_EMITTER"},
+    flags=LIGHT_FLAGS | SOLVER_FLAGS | {"REFLECTED_EMITTER", "EMITTER_MASK"},
 )
 COMPOSITE_PROGRAM = ProgramSpec(
     "fermat_composite",
@@ -156,17 +157,19 @@ def reflector_of(scene: Scene, index: int, samples: int | None = None) -> Reflec
 
 
 def emitter_mesh(light: QuadLight | PolygonLight) -> MeshData:
-    """A polygon light as a fan mesh of mesh.vert's layout (normal = the emitting side)."""
+    """A polygon light as a fan mesh of mesh.vert's layout (normal = the emitting side; uv = a quad's (u, v), where
+    its mask is read)."""
     poly = light.polygon()
     n = polygon_normal(poly)
     t = poly[1] - poly[0]
     t /= np.linalg.norm(t)
     k = np.arange(1, len(poly) - 1)
+    uv = np.zeros((len(poly), 2), np.float32)
     return MeshData(
         positions=poly.astype(np.float32),
         normals=np.tile(n, (len(poly), 1)).astype(np.float32),
         tangents=np.tile([*t, 1.0], (len(poly), 1)).astype(np.float32),
-        uvs=np.zeros((len(poly), 2), np.float32),
+        uvs=np.stack(quad_uv(light, poly), axis=-1).astype(np.float32) if isinstance(light, QuadLight) else uv,
         indices=np.stack([np.zeros_like(k), k, k + 1], axis=1).astype(np.uint32),
     )
 
@@ -295,18 +298,22 @@ class Fermat(Forward):
                 REFLECTED_PROGRAM,
                 slots={"BRDF": material.glsl},
                 REFLECTED_EMITTER=0,
+                EMITTER_MASK=0,
                 **self._light_flags,
                 **material.flags(),
                 **solver,
             )
             uniforms = {**material.uniforms(), **reflector.uniforms()}
             draws.append((program, self.mesh_vertex_array(program, data), uniforms, material.textures(ctx)))
+        masks = {id(light): mask for _, _, light, mask in self._emitters}  # the forward pass's mask textures
         for data, light in self._reflected_emitters:
+            mask = masks.get(id(light))
             program = get_program(
                 ctx,
                 REFLECTED_PROGRAM,
                 slots={"BRDF": "reflets/brdf/glsl/lambert.glsl"},  # compiled out: an emitter is not shaded
                 REFLECTED_EMITTER=1,
+                EMITTER_MASK=int(mask is not None),
                 **self._light_flags,
                 **solver,
             )
@@ -315,7 +322,8 @@ class Fermat(Forward):
                 "u_two_sided": bool(light.two_sided),
                 **reflector.uniforms(),
             }
-            draws.append((program, self.mesh_vertex_array(program, data), uniforms, {}))
+            textures = {"u_mask": mask} if mask is not None else {}
+            draws.append((program, self.mesh_vertex_array(program, data), uniforms, textures))
         return draws
 
     # ------------------------------------------------------------------ per-size images

@@ -25,6 +25,9 @@ uniform float u_hidden_tolerance;  // world distance P may lie behind the visibl
 uniform vec3 u_radiance;
 uniform bool u_two_sided;
 #endif
+#if EMITTER_MASK
+uniform sampler2D u_mask;  // the light's mask at the quad's (u, v) (nearest texel)
+#endif
 
 out vec4 f_color;
 
@@ -37,7 +40,11 @@ void main() {
     vec3 to_eye = v_mirror_point - v_position;
 #if REFLECTED_EMITTER
     bool front = dot(v_normal, to_eye) > 0.0;
-    f_color = vec4((front || u_two_sided) ? u_radiance : vec3(0.0), 1.0);
+    vec3 radiance = u_radiance;
+#if EMITTER_MASK
+    radiance *= texture(u_mask, v_uv).r;
+#endif
+    f_color = vec4((front || u_two_sided) ? radiance : vec3(0.0), 1.0);
 #else
     vec3 n = normalize(v_normal);
     if (dot(n, to_eye) < 0.0) n = -n;  // two-sided surfaces, as seen from P
