@@ -10,7 +10,10 @@ import argparse
 import json
 import re
 import sys
+import time
 from pathlib import Path
+
+import numpy as np
 
 from .errors import ArgumentError, RefletsError
 
@@ -207,6 +210,43 @@ def cmd_fit_ltc(args) -> int:
     return 0
 
 
+def cmd_scratch_brdf(args) -> int:
+    from .imageio import check_output_path
+    from .scratches import build_table, plot_table
+
+    out = Path(args.output)
+    if out.suffix != ".npz":
+        raise ArgumentError(f"'{out}': a scratch BRDF table is written as .npz", field="-o")
+    plot = Path(args.plot) if args.plot else out.with_suffix(".png")
+    check_output_path(out, allowed=(".npz",))
+    check_output_path(plot, allowed=(".png",))
+    conductor = None
+    if args.conductor:
+        eta, k = args.conductor[: len(args.conductor) // 2], args.conductor[len(args.conductor) // 2 :]
+        if len(args.conductor) not in (2, 6):
+            raise ArgumentError("give ETA K (2 numbers) or ETA_R ETA_G ETA_B K_R K_G K_B (6)", field="--conductor")
+        conductor = (eta[0], k[0]) if len(eta) == 1 else (tuple(eta), tuple(k))
+    started = time.perf_counter()
+    table = build_table(
+        args.profile,
+        ior=None if args.ior is None and conductor is None else args.ior,
+        conductor=conductor,
+        fresnel=args.fresnel,
+        size=args.size,
+        rays=args.rays,
+        seed=args.seed,
+        backend=args.backend,
+    )
+    seconds = time.perf_counter() - started
+    table.save(out)
+    plot_table(table, plot)
+    print(
+        f"wrote {out} and {plot} ({args.profile}, {args.size}x{args.size}, {args.rays} rays per column, "
+        f"{args.backend}, {seconds:.2f} s); max |energy - 1| over columns {np.max(np.abs(table.energy - 1.0)):.2e}"
+    )
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="reflets", description=__doc__.splitlines()[0])
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
@@ -291,6 +331,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, help="output table (.npz)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress")
     p.set_defaults(func=cmd_fit_ltc)
+
+    p = sub.add_parser("scratch-brdf", help="precompute the BRDF table of a scratch profile (2D ray tracing)")
+    p.add_argument("--profile", required=True, help="vgroove:D | quartic:D | flat | file:PATH (x,h CSV or .npy)")
+    p.add_argument("--ior", type=float, help="real index of the walls (Schlick); none and no --conductor: F = 1")
+    p.add_argument("--conductor", type=float, nargs="+", metavar="X", help="ETA K, or 3 ETA then 3 K (RGB)")
+    p.add_argument("--fresnel", choices=["auto", "exact"], default="auto", help="auto: Schlick / Lazányi")
+    p.add_argument("--size", type=int, default=256, help="bins per axis (default 256)")
+    p.add_argument("--rays", type=int, default=10000, help="rays per φ_in column (default 10000)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--backend", choices=["numpy", "gpu"], default="numpy", help="gpu: the compute shader")
+    p.add_argument("-o", "--output", required=True, help="output table (.npz)")
+    p.add_argument("--plot", help="plot of the table (default: the output with .png)")
+    p.set_defaults(func=cmd_scratch_brdf)
 
     p = sub.add_parser("info", help="OpenGL driver, methods and package versions")
     p.add_argument("--json", action="store_true")
