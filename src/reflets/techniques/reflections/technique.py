@@ -208,6 +208,10 @@ class Fermat(Forward):
     Params: ClassVar = FermatParams
 
     def prepare(self, scene: Scene) -> None:
+        if not any(mesh.reflector for mesh in scene.mesh):
+            raise ArgumentError(
+                "the fermat method needs a mesh with reflector = true (and a mirror material)", field="mesh"
+            )
         super().prepare(scene)
         ctx = self.ctx
         self._reflectors = [
@@ -215,27 +219,23 @@ class Fermat(Forward):
         ]
         self._grids = [r.grid_texture(ctx) for r in self._reflectors]
         self._objects += [g for g in self._grids if g is not None]
-        if not self._reflectors:
-            raise ArgumentError(
-                "the fermat method needs a mesh with reflector = true (and a mirror material)", field="mesh"
-            )
         self._gbuffer_size = None
+        meshes = [mesh_data(scene, i) for i in range(len(scene.mesh))]
+        ids = {r.index: k + 1 for k, r in enumerate(self._reflectors)}
+        bounds = [bounding_sphere(meshes[r.index].positions.astype(np.float64)) for r in self._reflectors]
+        centres = [centre for centre, _ in bounds]
         gbuffer = get_program(ctx, GBUFFER_PROGRAM)
         self._gbuffer_draws = []  # (vao, reflector id)
         self._reflected_meshes = []  # (mesh data subdivided, material)
-        points = []
-        ids = {r.index: k + 1 for k, r in enumerate(self._reflectors)}
-        centres = [bounding_sphere(mesh_data(scene, r.index).positions.astype(np.float64))[0] for r in self._reflectors]
         self.subdivisions = []  # k per reflected mesh (emitters last), for reports
-        for index, mesh in enumerate(scene.mesh):
-            data = mesh_data(scene, index)
-            points.append(data.positions)
+        for index, (mesh, data) in enumerate(zip(scene.mesh, meshes, strict=True)):
             self._gbuffer_draws.append((self.mesh_vertex_array(gbuffer, data), float(ids.get(index, 0))))
             if index not in ids:
                 k = self._subdivision(data, centres)
                 self.subdivisions.append(k)
                 self._reflected_meshes.append((data.subdivided(k), scene.materials[mesh.material]))
         self._reflected_emitters = []
+        points = [data.positions for data in meshes]
         for light in scene.light:
             if isinstance(light, QuadLight | PolygonLight):
                 data = emitter_mesh(light)
@@ -244,12 +244,11 @@ class Fermat(Forward):
                 k = self._subdivision(data, centres)
                 self.subdivisions.append(k)
                 self._reflected_emitters.append((data.subdivided(k), light))
-        _, radius = bounding_sphere(np.concatenate(points))
-        self._depth_range = 4.0 * radius
+        self._depth_range = 4.0 * bounding_sphere(np.concatenate(points))[1]
         # per reflector: its draws through the solver (vertex arrays bound to that reflector's programs)
         self._reflection_draws = [self._reflector_draws(r) for r in self._reflectors]
         self._composites = []
-        for r in self._reflectors:
+        for r, (_, size) in zip(self._reflectors, bounds, strict=True):
             material = scene.materials[scene.mesh[r.index].material]
             program = get_program(
                 ctx,
@@ -260,7 +259,7 @@ class Fermat(Forward):
             )
             vao = ctx.vertex_array(program, [])
             self._objects.append(vao)
-            self._composites.append((program, vao, material.uniforms(), self._reflector_size(r)))
+            self._composites.append((program, vao, material.uniforms(), size))
 
     def _subdivision(self, data: MeshData, centres: list[np.ndarray]) -> int:
         """k for one mesh: the given one, or (auto) the smallest making every triangle's longest edge span at
@@ -283,10 +282,6 @@ class Fermat(Forward):
             "ITERATIONS": self.params.iterations or DEFAULT_ITERATIONS[solver],
             "COUNT_ITERATIONS": int(count),
         }
-
-    def _reflector_size(self, reflector: Reflector) -> float:
-        data = mesh_data(self.scene, reflector.index)
-        return bounding_sphere(data.positions.astype(np.float64))[1]
 
     def _reflector_draws(self, reflector: Reflector) -> list[tuple]:
         ctx = self.ctx
