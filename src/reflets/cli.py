@@ -294,7 +294,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_reference)
 
     p = sub.add_parser("bench", help="run a benchmark suite and write benchmarks/results/SUITE.{json,md}")
-    p.add_argument("suite", help="suite name: reference, arealights, ltc-cost, translucency, reflections")
+    p.add_argument("suite", help="suite name: reference, arealights, ltc-cost, translucency, reflections, scratches")
     p.add_argument("-o", "--output", default="benchmarks/results", help="results folder (default benchmarks/results)")
     p.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke test")
     p.set_defaults(func=cmd_bench)
