@@ -10,6 +10,12 @@ condition): the independent reference the profiles are measured against.
 Results are per unit flux *transmitted* into the medium (the entry Fresnel factor is the caller's), split into
 single scattering (photons that leave after exactly one event) and multiple scattering (two or more), with the
 Monte Carlo standard error of each.
+
+:func:`render_volumetric` path traces the same medium inside a scene's closed meshes, lit by one point or
+directional light: straight shadow rays through an index-matched boundary (η = 1), or, through a smooth
+refracting one, Fresnel and Snell at every crossing and a manifold connection to the light (a point light
+cannot be reached through a refracting boundary by tracing or by a shadow ray: its refracted path to an interior
+point is found by Newton's method, and its flux density there from the beam's cross-section).
 """
 
 from __future__ import annotations
@@ -21,7 +27,13 @@ from rich.progress import Progress
 
 from ..brdf.base import orthonormal_basis
 from ..translucency.medium import Medium
-from ..translucency.optics import fresnel_reflectance, henyey_greenstein, refracted_cos, sample_henyey_greenstein
+from ..translucency.optics import (
+    fresnel_reflectance,
+    fresnel_transmittance,
+    henyey_greenstein,
+    refracted_cos,
+    sample_henyey_greenstein,
+)
 
 
 @dataclass
@@ -147,12 +159,6 @@ def _check_volumetric_scene(scene):
             field="mesh.material",
         )
     material = scene.materials[next(iter(materials))]
-    if abs(material.eta - 1.0) > 1e-9:
-        raise ArgumentError(
-            f"the volumetric reference needs an index-matched boundary (eta = 1, got {material.eta}): through a "
-            "smooth refracting boundary a point or directional light cannot be connected to paths",
-            field="materials.eta",
-        )
     lights = [light for light in scene.light if isinstance(light, PointLight | DirectionalLight)]
     if len(scene.light) != 1 or not lights:
         raise ArgumentError("the volumetric reference needs exactly one point or directional light", field="light")
@@ -184,15 +190,30 @@ def _inside_length(geometry, origins, directions, distances, max_crossings: int 
     return total
 
 
-def render_volumetric(scene, spp: int = 16, *, seed: int = 0, size=None, progress: bool = True) -> VolumetricImage:
+def render_volumetric(
+    scene,
+    spp: int = 16,
+    *,
+    seed: int = 0,
+    size=None,
+    progress: bool = True,
+    refract: bool | None = None,
+    orders: int | None = None,
+) -> VolumetricImage:
     """Volumetric path tracing of a homogeneous translucent medium inside the scene's closed meshes, lit by one
     point or directional light: the ground truth of the ``translucent`` technique (all orders of scattering).
 
-    Index-matched boundary only (``eta = 1``): camera rays enter straight, every scattering vertex connects to
+    Index-matched boundary (``eta = 1``): camera rays enter straight, every scattering vertex connects to
     the light with a shadow ray whose transmittance counts the medium crossed on the way (re-entries included,
     e.g. through a bunny's ear), free flights that reach the boundary leave. Henyey–Greenstein phase, absorption
     weighting, Russian roulette; each colour channel is its own walk. One pixel-centre ray per sample (as the
-    GPU's pixel centres); the image carries its Monte Carlo standard error."""
+    GPU's pixel centres); the image carries its Monte Carlo standard error.
+
+    A refracting boundary (``eta ≠ 1``, or ``refract=True``) goes through :func:`_walk_refracting`: Fresnel
+    and Snell at every crossing, and the light reached through the boundary by a manifold connection
+    (:func:`_refracted_connection`). There the camera ray's own reflection is left out (the image is the light
+    that leaves the medium towards the camera: the technique's ``single`` + ``multiple`` terms). ``orders``
+    caps the scattering events per path (1: single scattering only)."""
     from ..reference.geometry import MESHES, SceneGeometry
     from ..scene.camera import pixel_rays
     from ..scene.model import DirectionalLight
@@ -220,9 +241,14 @@ def render_volumetric(scene, spp: int = 16, *, seed: int = 0, size=None, progres
     else:
         light_pos = np.asarray(light.position, np.float64)
         power = np.asarray(light.intensity, np.float64)
-    with Progress(disable=not progress, transient=True) as bar:
+    refracting = abs(material.eta - 1.0) > 1e-9 if refract is None else refract
+    if refracting:
+        total, total2 = _render_refracting(
+            geometry, medium, scale, light, dirs[pix], hits, pix, spp, rng, orders, progress
+        )
+    with Progress(disable=not progress or refracting, transient=True) as bar:
         task = bar.add_task("volumetric reference", total=spp * 3)
-        for _ in range(spp):
+        for _ in range(0 if refracting else spp):
             for c in range(3):
                 sigma_t = float(medium.sigma_t[c]) * scale
                 albedo = float(medium.albedo[c])
@@ -231,6 +257,7 @@ def render_volumetric(scene, spp: int = 16, *, seed: int = 0, size=None, progres
                 d = dirs[pix].copy()
                 wgt = np.ones(n)
                 acc = np.zeros(n)
+                events = np.zeros(n, dtype=np.int64)
                 idx = np.arange(n)
                 for _ in range(100_000):
                     if idx.size == 0:
@@ -254,6 +281,9 @@ def render_volumetric(scene, spp: int = 16, *, seed: int = 0, size=None, progres
                     inside = _inside_length(geometry, pos[stay], np.ascontiguousarray(wl), dist)
                     phase = henyey_greenstein(np.sum(d[stay] * wl, axis=1), medium.g)
                     acc[stay] += wgt[stay] * phase * incident * np.exp(-sigma_t * inside)
+                    events[stay] += 1
+                    if orders is not None:
+                        wgt[stay[events[stay] >= orders]] = 0.0
                     cos_t = sample_henyey_greenstein(medium.g, rng.random(stay.size))
                     d[stay] = _scatter(d[stay], cos_t, 2.0 * np.pi * rng.random(stay.size))
                     low = stay[wgt[stay] < 1e-3]
@@ -272,3 +302,305 @@ def render_volumetric(scene, spp: int = 16, *, seed: int = 0, size=None, progres
     image[pix] = mean
     err[pix] = np.sqrt(var)
     return VolumetricImage(image.reshape(h, w, 3), err.reshape(h, w, 3), mask.reshape(h, w), spp)
+
+
+# ------------------------------------------------------------------------------ refracting boundary (η ≠ 1)
+
+
+def _refract(d: np.ndarray, n: np.ndarray, ratio) -> tuple[np.ndarray, np.ndarray]:
+    """Snell: unit directions d through normals n facing against them, ratio = n_from / n_to; (directions, ok),
+    ok False under total internal reflection."""
+    cos_i = -np.sum(d * n, axis=-1)
+    sin2_t = np.asarray(ratio) ** 2 * np.maximum(0.0, 1.0 - cos_i * cos_i)
+    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
+    t = np.asarray(ratio)[..., None] * d + (np.asarray(ratio) * cos_i - cos_t)[..., None] * n
+    return t / np.linalg.norm(t, axis=-1, keepdims=True), sin2_t < 1.0
+
+
+def _planar_start(geometry, u, eta: float, omega, origin, point: bool) -> None:
+    """Newton's starting ray (in place): the exact refracted connection through the tangent plane where the
+    straight line from the light to u meets the boundary (Snell in the plane of incidence, a monotonic 1-D
+    equation solved by bisection); it leaves a couple of iterations on the mesh instead of a dozen."""
+    from ..reference.geometry import MESHES
+
+    hits = geometry.intersect(origin, omega)
+    hit = np.nonzero(hits.kind == MESHES)[0]
+    if hit.size == 0:
+        return
+    surf = _hit_points(geometry, hits.prim[hit], hits.u[hit], hits.v[hit], omega[hit])
+    y, nrm, uu = surf.position, surf.normal, u[hit]
+    depth = np.sum((y - uu) * nrm, axis=1)  # u below the tangent plane
+    if point:
+        source = origin[hit]
+        height = np.sum((source - y) * nrm, axis=1)
+        foot_l = source - height[:, None] * nrm
+        foot_u = uu + depth[:, None] * nrm
+        along = foot_u - foot_l
+        reach = np.linalg.norm(along, axis=1)
+        along /= np.maximum(reach, 1e-300)[:, None]
+        lo, hi = np.zeros(hit.size), reach.copy()
+        for _ in range(40):  # x: distance from the light's foot to the entry point
+            x = 0.5 * (lo + hi)
+            f = x / np.hypot(x, height) - eta * (reach - x) / np.maximum(np.hypot(reach - x, depth), 1e-300)
+            lo, hi = np.where(f < 0, x, lo), np.where(f < 0, hi, x)
+        entry = foot_l + along * (0.5 * (lo + hi))[:, None]
+        start = entry - source
+        start /= np.linalg.norm(start, axis=1, keepdims=True)
+        ok = (depth > 0) & (height > 0) & np.all(np.isfinite(start), axis=1)
+        omega[hit[ok]] = start[ok]
+    else:
+        t, refracted = _refract(omega[hit], nrm, 1.0 / eta)
+        cos_t = -np.sum(t * nrm, axis=1)
+        entry = uu - t * (depth / np.maximum(cos_t, 1e-12))[:, None]
+        ok = (depth > 0) & refracted & (cos_t > 1e-6)
+        origin[hit[ok]] = entry[ok] - omega[hit[ok]] * 4.0 * geometry.radius
+
+
+def _refracted_connection(geometry, u, eta: float, *, light_pos=None, travel=None, iterations: int = 16):
+    """The light reaching interior points u through the smooth boundary (a manifold next-event estimation:
+    Hanika et al. 2015, one refracting vertex). The light ray is parameterised by two numbers — its direction
+    around the current one (point light) or its origin across the beam (directional light) — traced to the
+    boundary point y, refracted there (interpolated normal) and followed to the plane through u orthogonal to
+    it; Newton on the miss distance, with the Jacobian J of that map by finite differences of the same traces.
+    At the solution the beam's cross-section at u is |det J| per unit of the parameters, so the flux density
+    normal to the refracted beam at u is power × F_T(y) / |det J| (I/d² without refraction). Returns (travel
+    direction t at u, F_T/|det J|, distance |u − y| inside, valid); not valid: no convergence, grazing or
+    missing traces, or the boundary between y and u (light entering elsewhere, e.g. through a thin part and out
+    again, is not followed)."""
+    from ..brdf.base import orthonormal_basis
+    from ..reference.geometry import MESHES
+
+    n = len(u)
+    radius = geometry.radius
+    point = light_pos is not None
+    if point:
+        omega = u - light_pos
+        dist = np.linalg.norm(omega, axis=1)
+        omega /= dist[:, None]
+        origin = np.broadcast_to(np.asarray(light_pos, np.float64), (n, 3)).copy()
+        eps = 1e-3 * radius / dist
+    else:
+        omega = np.broadcast_to(np.asarray(travel, np.float64), (n, 3)).copy()
+        origin = u - omega * 4.0 * radius  # outside the bounding sphere
+        eps = np.full(n, 1e-3 * radius)
+    _planar_start(geometry, u, eta, omega, origin, point)
+    param = omega if point else origin  # what Newton moves (updated in place)
+    prev, move = param.copy(), np.zeros((n, 3))
+    best = np.full(n, np.inf)  # miss distance at prev
+    has_prev = np.zeros(n, dtype=bool)
+    halvings = np.zeros(n, dtype=np.int64)
+    t_out = np.zeros((n, 3))
+    factor = np.zeros(n)
+    inside = np.zeros(n)
+    valid = np.zeros(n, dtype=bool)
+    active = np.arange(n)
+    tol = 1e-5 * radius  # float32 traces: hit points are off their rays by ~1e-7 of the distance
+    for _ in range(iterations):
+        if active.size == 0:
+            break
+        m = active.size
+        e1, e2 = orthonormal_basis(omega[active])
+        h = eps[active, None]
+        if point:
+            o = np.tile(origin[active], (3, 1))
+            dk = np.concatenate([omega[active], omega[active] + h * e1, omega[active] + h * e2])
+            dk /= np.linalg.norm(dk, axis=1, keepdims=True)
+        else:
+            o = np.concatenate([origin[active], origin[active] + h * e1, origin[active] + h * e2])
+            dk = np.tile(omega[active], (3, 1))
+        hits = geometry.intersect(o, dk)
+        ok = (hits.kind == MESHES).reshape(3, m).all(axis=0)
+        prim = np.where(hits.kind == MESHES, hits.prim, 0)
+        surf = _hit_points(geometry, prim, hits.u, hits.v, dk)  # normals facing the light
+        nrm = surf.normal
+        tk, refracted = _refract(dk, nrm, 1.0 / eta)
+        ok &= refracted.reshape(3, m).all(axis=0)
+        y = surf.position.reshape(3, m, 3)
+        tk = tk.reshape(3, m, 3)
+        t0 = tk[0]
+        uu = u[active]
+        s = np.sum((uu - y) * t0, axis=-1) / np.maximum(np.sum(tk * t0, axis=-1), 1e-12)
+        ok &= s[0] > 0.0
+        p = y + s[..., None] * tk
+        b1, b2 = orthonormal_basis(t0)
+        miss = p[0] - uu
+        r = np.stack([np.sum(miss * b1, axis=1), np.sum(miss * b2, axis=1)], axis=1)
+        dp1, dp2 = (p[1] - p[0]) / h, (p[2] - p[0]) / h
+        j = np.stack(
+            [
+                np.stack([np.sum(dp1 * b1, axis=1), np.sum(dp2 * b1, axis=1)], axis=1),
+                np.stack([np.sum(dp1 * b2, axis=1), np.sum(dp2 * b2, axis=1)], axis=1),
+            ],
+            axis=1,
+        )
+        det = j[:, 0, 0] * j[:, 1, 1] - j[:, 0, 1] * j[:, 1, 0]
+        ok &= np.abs(det) > 1e-12 * radius * radius
+        rn = np.linalg.norm(r, axis=1)
+        # backtracking: a step that misses the object or does not reduce the miss distance is halved
+        worse = ~ok | (rn >= best[active])
+        retry = worse & has_prev[active] & (halvings[active] < 6)
+        if np.any(retry):
+            a = active[retry]
+            move[a] *= 0.5
+            halvings[a] += 1
+            param[a] = prev[a] + move[a]
+        done = ~worse & (rn < tol)
+        if np.any(done):
+            a = active[done]
+            cos_y = -np.sum(dk[:m][done] * nrm[:m][done], axis=1)
+            t_out[a] = t0[done]
+            factor[a] = fresnel_transmittance(cos_y, eta) / np.abs(det[done])
+            inside[a] = np.linalg.norm(uu[done] - y[0][done], axis=1)
+            valid[a] = True
+        step_on = ~worse & ~done
+        if np.any(step_on):
+            a = active[step_on]
+            delta = -np.linalg.solve(j[step_on], r[step_on][..., None])[..., 0]
+            limit = 0.1 if point else 0.1 * radius
+            norm = np.linalg.norm(delta, axis=1, keepdims=True)
+            delta *= np.minimum(1.0, limit / np.maximum(norm, 1e-300))
+            prev[a] = param[a]
+            best[a] = rn[step_on]
+            has_prev[a] = True
+            halvings[a] = 0
+            move[a] = delta[:, :1] * e1[step_on] + delta[:, 1:] * e2[step_on]
+            param[a] = prev[a] + move[a]
+        if point:
+            param[active] /= np.linalg.norm(param[active], axis=1, keepdims=True)
+        active = active[retry | step_on]
+    # the refracted segment y → u must stay inside (no boundary before u)
+    idx = np.nonzero(valid)[0]
+    if idx.size:
+        eps_ray = geometry.epsilon
+        start = u[idx] - t_out[idx] * inside[idx, None]
+        hits = geometry.intersect(start + t_out[idx] * eps_ray, t_out[idx])
+        blocked = (hits.kind >= 0) & (hits.t + eps_ray < inside[idx] - 10 * eps_ray)
+        valid[idx[blocked]] = False
+    return t_out, factor, inside, valid
+
+
+@dataclass
+class _HitPoints:
+    position: np.ndarray
+    normal: np.ndarray  # interpolated, facing against the ray
+    geometric_normal: np.ndarray  # facing against the ray
+
+
+def _hit_points(geometry, prim, u, v, d) -> _HitPoints:
+    """Position and normals at mesh hits (float64 from the barycentrics): the part of SceneGeometry.surface the
+    walk needs, without the tangent frame (this runs a dozen times per scattering event)."""
+    face = geometry.faces[prim]
+    w = np.stack([1.0 - u - v, u, v], axis=-1)[..., None]
+    p = geometry.vertices[face]
+    n = np.sum(w * geometry.normals[face], axis=-2)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    ng = np.stack(
+        [
+            e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1],
+            e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2],
+            e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0],
+        ],
+        axis=-1,
+    )
+    ng /= np.maximum(np.linalg.norm(ng, axis=-1, keepdims=True), 1e-300)
+    flip = np.where(np.sum(ng * d, axis=-1) > 0, -1.0, 1.0)[:, None]
+    return _HitPoints(np.sum(w * p, axis=-2), n * flip, ng * flip)
+
+
+def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng, orders, progress):
+    """All samples and channels of the refracting walk as one batch (chunked): per-path coefficients, so that
+    the long tail of the walks runs on large arrays. Returns per-pixel Σ and Σ² of the samples (P, 3)."""
+    n = len(pix)
+    total = np.zeros((n, 3))
+    total2 = np.zeros((n, 3))
+    per_chunk = max(1, 300_000 // max(3 * n, 1))
+    with Progress(disable=not progress, transient=True) as bar:
+        task = bar.add_task("volumetric reference (refracting boundary)", total=spp)
+        done = 0
+        while done < spp:
+            k = min(per_chunk, spp - done)
+            channel = np.tile(np.repeat(np.arange(3), n), k)
+            pixel = np.tile(np.arange(n), 3 * k)
+            acc = _walk_refracting(geometry, medium, channel, scale, light, dirs[pixel], hits, pix[pixel], rng, orders)
+            acc = acc.reshape(k, 3, n)
+            total += acc.sum(axis=0).T
+            total2 += (acc * acc).sum(axis=0).T
+            done += k
+            bar.advance(task, k)
+    return total, total2
+
+
+def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits, rays, rng, orders=None):
+    """One path per camera ray (channel per path) through a smooth dielectric boundary (render_volumetric)."""
+    from ..reference.geometry import MESHES
+    from ..scene.model import DirectionalLight
+
+    eta = float(medium.eta)
+    sigma_t = np.asarray(medium.sigma_t, np.float64)[channel] * scale
+    albedo = np.asarray(medium.albedo, np.float64)[channel]
+    eps = geometry.epsilon
+    if isinstance(light, DirectionalLight):
+        travel = np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
+        connect = {"travel": travel}
+        power = np.asarray(light.irradiance, np.float64)[channel]
+    else:
+        connect = {"light_pos": np.asarray(light.position, np.float64)}
+        power = np.asarray(light.intensity, np.float64)[channel]
+    n = len(rays)
+    surf = _hit_points(geometry, hits.prim[rays], hits.u[rays], hits.v[rays], dirs)  # normals facing the camera
+    d, ok = _refract(dirs, surf.normal, 1.0 / eta)
+    ok &= np.sum(d * surf.geometric_normal, axis=1) < 0.0
+    # radiance leaving a medium of index η is divided by η²; the camera ray's reflection is not followed
+    w = np.where(ok, fresnel_transmittance(-np.sum(dirs * surf.normal, axis=1), eta) / eta**2, 0.0)
+    pos = surf.position.copy()
+    inside = np.ones(n, dtype=bool)
+    events = np.zeros(n, dtype=np.int64)
+    acc = np.zeros(n)
+    idx = np.nonzero(w > 0.0)[0]
+    for _ in range(100_000):
+        if idx.size == 0:
+            break
+        bound = geometry.intersect(pos[idx] + d[idx] * eps, d[idx])
+        has = bound.kind == MESHES
+        t_bound = np.where(has, bound.t + eps, np.inf)
+        ins = inside[idx]
+        t_free = np.where(ins, -np.log1p(-rng.random(idx.size)) / sigma_t[idx], np.inf)
+        scatter = ins & (t_free < t_bound)
+        sc = idx[scatter]
+        if sc.size:
+            pos[sc] += d[sc] * t_free[scatter, None]
+            w[sc] *= albedo[sc]
+            events[sc] += 1
+            t_light, factor, length, valid = _refracted_connection(geometry, pos[sc], eta, **connect)
+            phase = henyey_greenstein(-np.sum(d[sc] * t_light, axis=1), medium.g)
+            contribution = w[sc] * phase * power[sc] * factor * np.exp(-sigma_t[sc] * length)
+            acc[sc] += np.where(valid, contribution, 0.0)
+            cos_t = sample_henyey_greenstein(medium.g, rng.random(sc.size))
+            d[sc] = _scatter(d[sc], cos_t, 2.0 * np.pi * rng.random(sc.size))
+            if orders is not None:
+                w[sc[events[sc] >= orders]] = 0.0
+            low = sc[w[sc] < 1e-3]
+            if low.size:
+                survive = rng.random(low.size) < 0.1
+                w[low[survive]] *= 10.0
+                w[low[~survive]] = 0.0
+        # boundary: Fresnel reflection or refraction, from either side
+        at = ~scatter & has
+        b = idx[at]
+        if b.size:
+            sb = _hit_points(geometry, bound.prim[at], bound.u[at], bound.v[at], d[b])  # normals facing against d
+            nb = sb.normal
+            pos[b] = sb.position
+            from_inside = inside[b]
+            cos_i = -np.sum(d[b] * nb, axis=1)
+            reflect = rng.random(b.size) < fresnel_reflectance(cos_i, np.where(from_inside, 1.0 / eta, eta))
+            t, _ = _refract(d[b], nb, np.where(from_inside, eta, 1.0 / eta))
+            new = np.where(reflect[:, None], d[b] + 2.0 * cos_i[:, None] * nb, t)
+            side = np.sum(new * sb.geometric_normal, axis=1)
+            w[b[np.where(reflect, side <= 0.0, side >= 0.0)]] = 0.0  # shading normal against the geometry
+            d[b] = new
+            inside[b[~reflect]] = ~from_inside[~reflect]
+        w[idx[~has & ~scatter]] = 0.0  # escaped (a point or directional light is never hit)
+        idx = idx[w[idx] > 0.0]
+    return acc

@@ -4,7 +4,8 @@
 // diffusion profile over the light view (reflets/techniques/translucency/technique.py explains each term).
 // Flags: LIGHT_DIRECTIONAL, PROFILE, SS_NODES (k_max + 1), RINGS, ANGLES, TERMS (bit 1 specular, 2 single,
 // 4 multiple), MS_PRODUCT (1: product integration, 0: the document's bilinear cells), VIEW_BLEND (the
-// document's light-/camera-view blend).
+// document's light-/camera-view blend), CURVATURE_REJECTION (the document's rejection of nodes past a fold),
+// REFRACTION (1: image-space two-surface refraction through the back-face maps; 2: its exit point as output).
 #include BRDF
 #include "reflets/techniques/translucency/shaders/profiles.glsl"
 
@@ -102,14 +103,35 @@ bool entering(vec3 xi, vec3 ni, out vec3 beam, out vec3 travel, out float cos_ra
     return true;
 }
 
-vec3 single_scattering(vec3 x, vec3 n, vec3 wo) {
+uniform float a_ss_c_l;               // march depth in mean free paths (c_l)
+uniform float a_ss_step;              // 1: the document's step rule, 0: trapezoid
+
+// Depth k of the march when the medium ends c mean free paths down the refracted ray (c < c_l): the same
+// truncated exponential up to c, with the rule's weights (the uniform tables hold the c = c_l case).
+float march_depth(int k, float c) {
+    return -log(max(1.0 - (1.0 - exp(-c)) * float(k) / float(SS_NODES - 1), 1e-30));
+}
+
+float march_weight(int k, float c) {
+    float here = march_depth(k, c);
+    float before = k > 0 ? march_depth(k - 1, c) : here;
+    float after = k < SS_NODES - 1 ? march_depth(k + 1, c) : here;
+    return a_ss_step > 0.5 ? here - before : 0.5 * (after - before);
+}
+
+// s_exit: mm along the refracted view ray to where it leaves the object (1e30: unknown, the half-space case).
+vec3 single_scattering(vec3 x, vec3 n, vec3 wo, float s_exit) {
     vec3 t_o = refract(-wo, n, 1.0 / m_eta);  // the view ray inside the medium
     vec3 sum = vec3(0.0);
     for (int c = 0; c < 3; ++c) {
         float sigma_t = a_sigma_t[c];
+        float c_end = min(a_ss_c_l, sigma_t * s_exit);  // in mean free paths
+        bool clipped = c_end < a_ss_c_l;
         float total = 0.0;
         for (int k = 0; k < SS_NODES; ++k) {
-            float s = a_ss_depth[k] / sigma_t;  // mm along the refracted view ray
+            float depth = clipped ? march_depth(k, c_end) : a_ss_depth[k];
+            float weight = clipped ? march_weight(k, c_end) : a_ss_weight[k];
+            float s = depth / sigma_t;  // mm along the refracted view ray
             vec3 p = x + t_o * (s / a_mm_per_unit);
             vec3 xi, ni;
             if (!light_lookup(p, xi, ni)) continue;
@@ -121,15 +143,67 @@ vec3 single_scattering(vec3 x, vec3 n, vec3 wo) {
             float s_line = light_distance(p, xi) * a_mm_per_unit;
             float s_refracted = s_line * cos_ratio;  // the document's Snell correction of the light's path
             float phase = hg_phase(dot(travel, -t_o), a_g);
-            total += a_ss_weight[k] / sigma_t * phase * beam[c] * cos_ratio * exp(-sigma_t * (s_refracted + s));
+            total += weight / sigma_t * phase * beam[c] * cos_ratio * exp(-sigma_t * (s_refracted + s));
         }
         sum[c] = a_sigma_s[c] * total;
     }
     return sum * (1.0 - fresnel_dielectric(dot(n, wo), m_eta)) / (m_eta * m_eta);
 }
 
-#if VIEW_BLEND
+#if VIEW_BLEND || REFRACTION
 uniform mat4 u_view_proj;            // the camera's (shared with the vertex stage)
+#endif
+
+#if REFRACTION
+uniform sampler2D u_back_position;   // the nearest back face of a translucent mesh per pixel (w = 1: one)
+uniform sampler2D u_back_normal;     // its outward normal
+uniform vec3 u_background;           // radiance behind the object (the scene's constant background)
+
+// Where the refracted view ray t from x (normal n, seen from wo) leaves the object: Wyman's two-surface
+// approximation. The back face behind x on the camera ray is d_V away; taking the back surface parallel to the
+// front one (his distance along the normal d_N ≈ d_V cos θ_o) gives the first estimate along t,
+// d_V cos θ_o / cos θ_t; it is refined by intersecting t with the tangent plane of the back face seen where
+// the estimate projects (exact on a flat back face), stepping back when the estimate leaves the map.
+bool refracted_exit(vec3 x, vec3 n, vec3 wo, vec3 t, out vec3 xe, out vec3 ne) {
+    vec3 xb, nb;
+    xe = x;
+    ne = -t;
+    if (!map_lookup(u_view_proj, u_back_position, u_back_normal, x, xb, nb)) return false;
+    float d = length(xb - x) * dot(n, wo) / max(dot(-n, t), 0.05);
+    bool found = false;
+    for (int i = 0; i < 6; ++i) {
+        if (!map_lookup(u_view_proj, u_back_position, u_back_normal, x + t * d, xb, nb)) {
+            d *= 0.5;
+            continue;
+        }
+        float facing = dot(t, nb);
+        if (facing < 1e-3) return false;  // the ray runs along the back surface there
+        float next = dot(xb - x, nb) / facing;
+        if (next <= 0.0) return false;
+        found = abs(next - d) < 1e-4 * next;
+        d = next;
+        if (found) break;
+    }
+    if (!found && !map_lookup(u_view_proj, u_back_position, u_back_normal, x + t * d, xb, nb)) return false;
+    xe = x + t * d;
+    ne = nb;
+    return true;
+}
+
+// The background seen through the object along the twice-refracted ray, attenuated by the unscattered
+// transmittance e^{−σ_t s} (scattered light is the other terms'; the document's e^{−σ_a s} holds for a clear
+// medium) and the two Fresnel transmittances; the η² of entering and the 1/η² of leaving cancel. Total
+// internal reflection at the exit: none (the reflected ray is not followed).
+vec3 transmitted(vec3 x, vec3 n, vec3 wo, vec3 t, vec3 xe, vec3 ne) {
+    vec3 out_dir = refract(t, -ne, m_eta);
+    if (dot(out_dir, out_dir) < 0.5) return vec3(0.0);
+    float s = length(xe - x) * a_mm_per_unit;
+    float ft = (1.0 - fresnel_dielectric(dot(n, wo), m_eta)) * (1.0 - fresnel_dielectric(dot(t, ne), 1.0 / m_eta));
+    return u_background * ft * exp(-a_sigma_t * s);
+}
+#endif
+
+#if VIEW_BLEND
 uniform sampler2D u_camera_position; // the camera's own position / normal maps (w = 1 where a surface is seen)
 uniform sampler2D u_camera_normal;
 uniform float a_blend_lambda;
@@ -143,31 +217,46 @@ bool camera_lookup(vec3 p, out vec3 xc, out vec3 nc) {
 // through p, per unit area of the plane orthogonal to the light. Of the camera view (view 1, the document's
 // blend): the surface point the camera sees through p, its flux density per unit area of the plane
 // orthogonal to the view (lit if the light map holds that point: E F_T cosθ_l / cosθ_o). r: true distance
-// (mm) from x.
-vec3 ring_node(int view, vec3 x, vec3 p, out float r) {
-    vec3 xi, ni, beam, travel;
+// (mm) from x; xs, ns: the surface point and its normal (surface: whether the view holds one through p).
+vec3 ring_node(int view, vec3 x, vec3 p, out float r, out vec3 xs, out vec3 ns, out bool surface) {
+    vec3 beam, travel;
     float cos_ratio;
     r = 0.0;
 #if VIEW_BLEND
     if (view == 1) {
-        vec3 xc, nc, xl, nl;
-        if (!camera_lookup(p, xc, nc) || !light_lookup(xc, xl, nl) || length(xl - xc) > u_shadow_bias) return vec3(0.0);
-        if (!entering(xc, nc, beam, travel, cos_ratio)) return vec3(0.0);
-        r = length(xc - x) * a_mm_per_unit;
-        float cos_l = dot(nc, to_light(xc));
-        float cos_o = max(dot(nc, normalize(u_eye - xc)), 0.05);
+        vec3 xl, nl;
+        surface = camera_lookup(p, xs, ns);
+        if (!surface || !light_lookup(xs, xl, nl) || length(xl - xs) > u_shadow_bias) return vec3(0.0);
+        if (!entering(xs, ns, beam, travel, cos_ratio)) return vec3(0.0);
+        r = length(xs - x) * a_mm_per_unit;
+        float cos_l = dot(ns, to_light(xs));
+        float cos_o = max(dot(ns, normalize(u_eye - xs)), 0.05);
         return beam * cos_l / cos_o;
     }
 #endif
-    if (!light_lookup(p, xi, ni) || !entering(xi, ni, beam, travel, cos_ratio)) return vec3(0.0);
-    r = length(xi - x) * a_mm_per_unit;
+    surface = light_lookup(p, xs, ns);
+    if (!surface || !entering(xs, ns, beam, travel, cos_ratio)) return vec3(0.0);
+    r = length(xs - x) * a_mm_per_unit;
     return beam;
 }
+
+#if CURVATURE_REJECTION
+uniform float a_curvature_max;  // 1/mm: κ above which a spoke of the ring integral stops
+
+// The document's curvature rejection: along a spoke (the nodes of one direction, centre outwards) the discrete
+// curvature between consecutive surface points, κ = angle(n_prev, n) / |x − x_prev|; once it exceeds κ_max the
+// spoke has crossed an edge or a fold onto another surface, and this node and those beyond it are dropped.
+bool spoke_continues(vec3 x_prev, vec3 n_prev, vec3 xs, vec3 ns) {
+    float turn = acos(clamp(dot(n_prev, ns), -1.0, 1.0));
+    return turn <= a_curvature_max * length(xs - x_prev) * a_mm_per_unit;
+}
+#endif
 
 const float GAUSS3_T[3] = float[3](0.1127016654, 0.5, 0.8872983346);  // Gauss-Legendre on [0, 1]
 const float GAUSS3_W[3] = float[3](0.2777777778, 0.4444444444, 0.2777777778);
 
-// The profile integrated around x over the light view (view 0) or the camera view (view 1).
+// The profile integrated around x over the light view (view 0) or the camera view (view 1), spoke by spoke
+// (one direction at a time, centre outwards, so that curvature rejection can cut a spoke).
 vec3 profile_integral(int view, vec3 x, vec3 wo) {
     vec3 axis = view == 0 ? to_light(x) : wo;
     mat3 basis = shading_frame(axis, vec4(0.0));  // columns: two axes of the plane orthogonal to the view
@@ -176,21 +265,38 @@ vec3 profile_integral(int view, vec3 x, vec3 wo) {
     // The centre: where the light enters along its line through x, r_c measured along that line (0 where the
     // light sees x — |xi − x| would add the light map's lateral quantisation, which a sharp profile feels).
     float r_c;
-    vec3 beam_c = ring_node(view, x, x, r_c);
+    vec3 xs_c, ns_c;
+    bool surface_c;
+    vec3 beam_c = ring_node(view, x, x, r_c, xs_c, ns_c, surface_c);
     vec3 xi_c, ni_c;
     if (view == 0 && light_lookup(x, xi_c, ni_c)) r_c = light_distance(x, xi_c) * a_mm_per_unit;
     if (view == 1 || r_c < u_shadow_bias * a_mm_per_unit) r_c = 0.0;  // the view sees x itself
     vec3 first_cell = vec3(0.0);                     // product rule: Σ_a ∫₀^ρ₁ R_d(r_a(ρ)) ρ dρ
-    for (int j = 1; j <= RINGS; ++j) {
-        vec3 ring = vec3(0.0);
-        for (int a = 0; a < ANGLES; ++a) {
-            float theta = TWO_PI * float(a) / float(ANGLES);
-            vec3 p = x + a_ring_radius[j] * (cos(theta) * basis[0] + sin(theta) * basis[1]);
+    for (int a = 0; a < ANGLES; ++a) {
+        float theta = TWO_PI * float(a) / float(ANGLES);
+        vec3 dir = cos(theta) * basis[0] + sin(theta) * basis[1];
+#if CURVATURE_REJECTION
+        vec3 x_prev = surface_c ? xs_c : x;
+        vec3 n_prev = surface_c ? ns_c : axis;
+        bool alive = true;
+#endif
+        for (int j = 1; j <= RINGS; ++j) {
+            vec3 p = x + a_ring_radius[j] * dir;
             float r;
-            vec3 beam = ring_node(view, x, p, r);
+            vec3 xs, ns;
+            bool surface;
+            vec3 beam = ring_node(view, x, p, r, xs, ns, surface);
+#if CURVATURE_REJECTION
+            if (surface && alive) {
+                alive = spoke_continues(x_prev, n_prev, xs, ns);
+                x_prev = xs;
+                n_prev = ns;
+            }
+            if (!alive) beam = vec3(0.0);
+#endif
 #if MS_PRODUCT
             // R_d at the true distance relative to the plane distance's, which the weights integrate
-            ring += beam * profile_rd(r) * a_ring_inv_rd[j];
+            sum += a_ring_weight[j] * beam * profile_rd(r) * a_ring_inv_rd[j];
             if (j == 1) {
                 // Inside the first ring the true distance is modelled as r(ρ)² = r_c² + k² ρ², k fitted to this
                 // direction's node (k ≥ 1: true distances are never shorter than the plane's), and the light
@@ -211,10 +317,9 @@ vec3 profile_integral(int view, vec3 x, vec3 wo) {
                 first_cell += total * ((1.0 - share) * beam_c + share * beam);
             }
 #else
-            ring += beam * profile_rd(r);
+            sum += a_ring_weight[j] * beam * profile_rd(r);
 #endif
         }
-        sum += a_ring_weight[j] * ring;
     }
 #if MS_PRODUCT
     // The first cell (ρ < ρ₁) holds most of a sharp profile's energy (normalised diffusion is singular at 0):
@@ -253,11 +358,24 @@ void main() {
         color += vec3(tr_specular(transpose(frame) * wo, transpose(frame) * wl)) * light_irradiance(x) * cos_l;
     }
 #endif
+    float s_exit = 1e30;  // mm along the refracted view ray to the back surface
+#if REFRACTION
+    vec3 t_in = refract(-wo, n, 1.0 / m_eta);
+    vec3 xe, ne;
+    bool exits = dot(n, wo) > 0.0 && refracted_exit(x, n, wo, t_in, xe, ne);
+    if (exits) s_exit = length(xe - x) * a_mm_per_unit;
+#endif
 #if (TERMS & 2) != 0
-    color += single_scattering(x, n, wo);
+    color += single_scattering(x, n, wo, s_exit);
 #endif
 #if (TERMS & 4) != 0
     color += multiple_scattering(x, n, wo);
+#endif
+#if REFRACTION && (TERMS & 8) != 0
+    if (exits) color += transmitted(x, n, wo, t_in, xe, ne);
+#endif
+#if REFRACTION == 2
+    color = exits ? xe : vec3(0.0);  // the exit point as output (tests)
 #endif
 #if OUTPUT == 1
     color = x;  // the geometry AOVs, as forward.frag writes them
