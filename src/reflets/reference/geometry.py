@@ -54,7 +54,7 @@ class SceneGeometry:
 
     def __init__(self, scene: Scene):
         rtcore_scene, mesh_construction = _embree()
-        positions, normals, tangents, faces, materials, meshes = [], [], [], [], [], []
+        positions, normals, tangents, uvs, faces, materials, meshes = [], [], [], [], [], [], []
         names = list(scene.materials)
         offset = 0
         for index, mesh in enumerate(scene.mesh):
@@ -62,6 +62,7 @@ class SceneGeometry:
             positions.append(data.positions.astype(np.float64))
             normals.append(data.normals.astype(np.float64))
             tangents.append(data.tangents.astype(np.float64))
+            uvs.append(data.uvs.astype(np.float64))
             faces.append(data.indices.astype(np.int64) + offset)
             materials.append(np.full(data.n_triangles, names.index(mesh.material)))
             meshes.append(np.full(data.n_triangles, index))
@@ -70,6 +71,7 @@ class SceneGeometry:
         self.vertices = np.concatenate(positions) if positions else np.zeros((0, 3))
         self.normals = np.concatenate(normals) if normals else np.zeros((0, 3))
         self.tangents = np.concatenate(tangents) if tangents else np.zeros((0, 4))
+        self.uvs = np.concatenate(uvs) if uvs else np.zeros((0, 2))  # Newton starts of parametric mirrors
         self.faces = np.concatenate(faces) if faces else np.zeros((0, 3), np.int64)
         self.face_material = np.concatenate(materials) if materials else np.zeros(0, np.int64)
         self.face_mesh = np.concatenate(meshes) if meshes else np.zeros(0, np.int64)  # index into scene.mesh
@@ -131,6 +133,11 @@ class SceneGeometry:
             query="OCCLUDED",
         )
         return np.asarray(res) != -1
+
+    def uv(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """The meshes' texture coordinates interpolated at hits (barycentrics ``u``, ``v`` of ``prim``), (N, 2)."""
+        w = np.stack([1.0 - u - v, u, v], axis=-1)[..., None]
+        return np.sum(w * self.uvs[self.faces[prim]], axis=-2)
 
     def surface(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray, ray_dir: np.ndarray) -> Surface:
         """Interpolated shading frame at mesh hits, flipped to face the ray origin (two-sided surfaces, like

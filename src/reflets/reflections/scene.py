@@ -1,9 +1,10 @@
 """Scene reflectors as NumPy surfaces: the CPU twin of what the ``fermat`` shaders solve on.
 
-A reflector mesh is a canonical shape (sphere, torus, open cylinder, plane) under its transform x → A x + t;
-:class:`AffineSurface` maps a canonical surface, its derivatives, charts and segment hits through that map,
-exactly as solver.glsl does (setup in canonical space, Newton on world-space derivatives), so the NumPy
-solvers and the GPU solver see the same problem.
+A reflector mesh is a canonical shape (sphere, torus, open cylinder, plane, Bézier patch, height field) under
+its transform x → A x + t; :class:`AffineSurface` maps a canonical surface, its derivatives, charts and segment
+hits through that map, exactly as solver.glsl does (setup in canonical space, Newton on world-space
+derivatives), so the NumPy solvers and the GPU solver see the same problem. Bézier and height-field surfaces
+are those scene.shapes samples for the mesh, so f(mesh uv) is the mesh vertex.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SceneError
-from ..scene.model import CylinderMesh, PlaneMesh, Scene, SphereMesh, TorusMesh
+from ..scene.model import BezierMesh, CylinderMesh, HeightFieldMesh, PlaneMesh, Scene, SphereMesh, TorusMesh
 from .surfaces import Chart, Cylinder, Plane, Sphere, Surface, Torus, _unit
 
 
@@ -86,8 +87,18 @@ def canonical_surface(mesh, index: int = 0) -> Surface:
     if isinstance(mesh, PlaneMesh):
         sx, sz = mesh.size
         return Plane((0.0, 0.0, 0.0), (sx, 0.0, 0.0), (0.0, 0.0, -sz))
+    if isinstance(mesh, BezierMesh | HeightFieldMesh):
+        from ..scene.shapes import bezier_surface, heightfield_surface
+
+        try:
+            if isinstance(mesh, BezierMesh):
+                return bezier_surface(mesh.control_points)  # the very surface the mesh samples
+            return heightfield_surface(mesh.heights, mesh.file, mesh.size, mesh.height_scale)
+        except SceneError as exc:
+            raise SceneError(exc.message, file=exc.file, field=f"mesh[{index}].{exc.field}") from None
     raise SceneError(
-        "reflector shapes are sphere (any transform: ellipsoids), torus, cylinder (caps = false) and plane",
+        "reflector shapes are sphere (any transform: ellipsoids), torus, cylinder (caps = false), plane, "
+        "bezier and heightfield",
         field=f"mesh[{index}].shape",
     )
 

@@ -611,42 +611,53 @@ class HeightField(ImplicitSurface):
 
     ``heights[j, i]`` is the height at ``x = x0 + i (x1 − x0)/(n_x − 1)``, ``y = y0 + j (y1 − y0)/(n_y − 1)``;
     u runs along x, v along y, so ``f_u × f_v`` (the normal) has a positive z component.
+
+    ``up = "y"`` lays the same field in a y-up world, ``f(u, v) = (x, h, z)``, the second range running along z
+    (scene height fields: ``y = h(x, z)``). With a decreasing z range (v along −z, as on the scene's planes)
+    ``f_u × f_v`` points to +y; ``implicit`` is negative below the field either way.
     """
 
-    def __init__(self, heights, x_range=(-1.0, 1.0), y_range=(-1.0, 1.0)):
+    def __init__(self, heights, x_range=(-1.0, 1.0), y_range=(-1.0, 1.0), up: str = "z"):
         self.heights = np.asarray(heights, dtype=np.float64)
         if self.heights.ndim != 2:
             raise ValueError("heights must be a 2D array (n_y, n_x)")
+        if up not in ("y", "z"):
+            raise ValueError(f"up must be 'y' or 'z', got {up!r}")
+        self.up, self._axis = up, (1 if up == "y" else 2)
         self.x_range, self.y_range = tuple(map(float, x_range)), tuple(map(float, y_range))
         self._h = GridInterpolator(self.heights, (False, False), "bicubic")
         self._lx = self.x_range[1] - self.x_range[0]
         self._ly = self.y_range[1] - self.y_range[0]
 
+    def _place(self, a, b, h) -> np.ndarray:
+        """World vector from the grid's two axes and the height axis."""
+        return _vec(a, h, b) if self.up == "y" else _vec(a, b, h)
+
     def _eval(self, u, v, order):
         parts = [p[..., 0] for p in self._h(u, v, order)]
         x, y = self.x_range[0] + self._lx * u, self.y_range[0] + self._ly * v
         zero = np.zeros_like(parts[0])
-        out = [_vec(x, y, parts[0])]
+        out = [self._place(x, y, parts[0])]
         if order >= 1:
-            out += [_vec(zero + self._lx, zero, parts[1]), _vec(zero, zero + self._ly, parts[2])]
+            out += [self._place(zero + self._lx, zero, parts[1]), self._place(zero, zero + self._ly, parts[2])]
         if order >= 2:
-            out += [_vec(zero, zero, p) for p in parts[3:]]
+            out += [self._place(zero, zero, p) for p in parts[3:]]
         return out
 
     @property
     def interior(self):
-        extent = max(self._lx, self._ly)
-        return np.array([np.mean(self.x_range), np.mean(self.y_range), self.heights.min() - extent])
+        extent = max(abs(self._lx), abs(self._ly))
+        return self._place(np.mean(self.x_range), np.mean(self.y_range), self.heights.min() - extent)
 
     def implicit(self, x):
         x = np.asarray(x)
         u, v = self.uv_of(x)
-        return x[..., 2] - self._h(u, v)[0][..., 0]
+        return x[..., self._axis] - self._h(u, v)[0][..., 0]
 
     def uv_of(self, x):
         x = np.asarray(x)
         u = (x[..., 0] - self.x_range[0]) / self._lx
-        v = (x[..., 1] - self.y_range[0]) / self._ly
+        v = (x[..., 3 - self._axis] - self.y_range[0]) / self._ly
         return self.clamp(u, v)
 
 

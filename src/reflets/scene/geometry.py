@@ -20,6 +20,8 @@ def mesh_data(scene: Scene, index: int) -> MeshData:
             local = load_mesh_file(scene.resolve(mesh.file))
         else:
             params = mesh.model_dump(exclude={"name", "material", "transform", "shape", "reflector"})
+            if params.get("file") is not None:  # a shape reading data (heightfield): relative to the scene
+                params["file"] = scene.resolve(params["file"])
             local = SHAPES[mesh.shape](**params)
     except SceneError as exc:
         raise SceneError(

@@ -10,7 +10,7 @@ from pydantic import ValidationError
 
 from ..errors import SceneError
 from .lightmask import load_mask
-from .model import EnvironmentLight, FileMesh, Scene
+from .model import EnvironmentLight, FileMesh, HeightFieldMesh, Scene
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -46,6 +46,7 @@ def load_dict(data: dict[str, Any], base_dir: str | Path | None = None, source: 
 def _check_files(scene: Scene, source) -> None:
     """Referenced files must exist (and measured tables load) now, not half-way through a render."""
     from ..brdf.measured import Measured
+    from .shapes import load_heights
 
     for name, material in scene.materials.items():
         if isinstance(material, Measured):
@@ -57,6 +58,12 @@ def _check_files(scene: Scene, source) -> None:
     for i, mesh in enumerate(scene.mesh):
         if isinstance(mesh, FileMesh) and not scene.resolve(mesh.file).is_file():
             raise SceneError(f"mesh file not found: {scene.resolve(mesh.file)}", file=source, field=f"mesh[{i}].file")
+        if isinstance(mesh, HeightFieldMesh) and mesh.file is not None:
+            mesh.file = scene.resolve(mesh.file)  # absolute: canonical_surface(mesh) has no scene to resolve with
+            try:
+                load_heights(mesh.file)
+            except SceneError as exc:
+                raise SceneError(exc.message, file=exc.file, field=f"mesh[{i}].file") from None
     for i, light in enumerate(scene.light):
         load_mask(scene, i)  # a bad mask fails here, naming light[i].mask
         if isinstance(light, EnvironmentLight) and not scene.resolve(light.file).is_file():

@@ -142,18 +142,75 @@ class TorusMesh(MeshBase):
         return self
 
 
+ControlRow = Annotated[list[Vec3], Field(min_length=4, max_length=4)]
+
+
+class BezierMesh(MeshBase):
+    """Bicubic Bézier patch: ``control_points[i][j]`` weighs B_i(u) B_j(v) (outer list along u, inner along v);
+    the front side is f_u × f_v. Usable as a reflector (the solver runs on the exact patch)."""
+
+    shape: Literal["bezier"]
+    control_points: Annotated[list[ControlRow], Field(min_length=4, max_length=4)]
+    segments: tuple[Count, Count] = (32, 32)
+
+    @field_validator("control_points")
+    @classmethod
+    def _not_degenerate(cls, value: list[list[tuple[float, float, float]]]) -> list[list[tuple[float, float, float]]]:
+        from .shapes import bezier_degeneracy
+
+        problem = bezier_degeneracy(np.asarray(value, dtype=np.float64))
+        if problem:
+            raise ValueError(problem)
+        return value
+
+
+class HeightFieldMesh(MeshBase):
+    """y = height_scale · h(x, z) over the size[0] × size[1] rectangle centred at the origin (Catmull–Rom
+    bicubic between samples); ``heights`` inline or ``file`` (.npy, relative to the scene file); row 0 at
+    z = −d/2, column 0 at x = −w/2. Usable as a reflector."""
+
+    shape: Literal["heightfield"]
+    heights: list[list[Finite]] | None = None
+    file: Path | None = None
+    size: tuple[Positive, Positive] = (1.0, 1.0)
+    height_scale: Finite = 1.0
+    segments: tuple[Count, Count] | None = None
+
+    @field_validator("heights")
+    @classmethod
+    def _grid(cls, value: list[list[float]] | None) -> list[list[float]] | None:
+        from .shapes import heights_problem
+
+        if value is not None:
+            lengths = {len(row) for row in value}
+            if len(lengths) > 1:
+                raise ValueError(f"rows have different lengths {sorted(lengths)}; heights must be a rectangular grid")
+            problem = heights_problem(np.asarray(value, dtype=np.float64))
+            if problem:
+                raise ValueError(problem)
+        return value
+
+    @model_validator(mode="after")
+    def _one_source(self) -> HeightFieldMesh:
+        if (self.heights is None) == (self.file is None):
+            raise ValueError("a heightfield needs exactly one of heights (inline 2D array) or file (a .npy file)")
+        return self
+
+
 SHAPE_MODELS: dict[str, type[MeshBase]] = {
     "plane": PlaneMesh,
     "sphere": SphereMesh,
     "cube": CubeMesh,
     "cylinder": CylinderMesh,
     "torus": TorusMesh,
+    "bezier": BezierMesh,
+    "heightfield": HeightFieldMesh,
 }
 
 
 def _mesh_tag(value: Any) -> str | None:
     if isinstance(value, dict):
-        return "file" if "file" in value else value.get("shape")
+        return "file" if "file" in value and "shape" not in value else value.get("shape")
     return "file" if isinstance(value, FileMesh) else getattr(value, "shape", None)
 
 

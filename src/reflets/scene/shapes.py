@@ -8,7 +8,7 @@ orientation. Conventions (right-handed world, y up):
 * ``tangent.xyz`` is the normalised ``∂p/∂u``; ``w = ±1`` is chosen so that ``w * cross(n, t)`` is the
   normalised ``∂p/∂v`` direction (glTF convention). With ``v`` running from the top (+y) down, as on the
   sphere and the cylinder side, the frame is left-handed and ``w = -1``; the plane, the cube, the cylinder
-  caps and the torus have ``w = +1``.
+  caps, the torus, the Bézier patch and the height field have ``w = +1``.
 * uv lies in [0, 1]; seam vertices are duplicated so uv is continuous on every triangle.
 * triangles are counter-clockwise seen from the side the normals point to; degenerate triangles at the
   sphere poles are dropped.
@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 
 from reflets.errors import SceneError
+from reflets.reflections.surfaces import BezierPatch, HeightField
 from reflets.scene.meshdata import MeshData
 
 # 128 × 64 keeps adjacent vertex normals 2π/128 ≈ 2.8° apart: the chord sag is ≈ 3e-4 of the radius and the
@@ -289,11 +291,177 @@ def torus(major: float = 1.0, minor: float = 0.25, segments: tuple[int, int] = D
     return _mesh(ring + small * nrm, nrm, tan, 1.0, np.stack([u, v], -1), _grid_indices(nu, nv, False))
 
 
+def _patch_mesh(surface, nu: int, nv: int, field: str) -> MeshData:
+    """A parametric patch over [0, 1]² sampled on the grid: uv = (u, v) exactly, normal unit(f_u × f_v),
+    tangent unit(f_u), w = +1 (then w · cross(n, t) has a positive f_v component)."""
+    u, v = _uv_grid(nu, nv)
+    pos, fu, fv = surface.evaluate(u, v, 1)
+    nrm = np.cross(fu, fv)
+    area = np.linalg.norm(nrm, axis=-1)
+    scale = np.linalg.norm(fu, axis=-1) * np.linalg.norm(fv, axis=-1)
+    bad = ~(area > 1e-9 * scale) | ~np.isfinite(area)
+    if np.any(bad):
+        j, i = np.argwhere(bad)[0]
+        raise SceneError(
+            f"the surface is degenerate at (u, v) = ({u[j, i]:.3g}, {v[j, i]:.3g}): f_u × f_v = 0, no normal there",
+            field=field,
+        )
+    return _mesh(pos, nrm, fu, 1.0, np.stack([u, v], -1), _grid_indices(nu, nv, False))
+
+
+# --------------------------------------------------------------------------------------------- Bézier patch
+def bezier_degeneracy(control: np.ndarray) -> str | None:
+    """Why a 4 × 4 × 3 control net does not give a regular patch (None if it does).
+
+    Checked on a 17² grid of (u, v), corners included: f_u × f_v must not vanish anywhere, so the mesh's
+    exact normals and the reflection solver's tangent frame exist (coincident or collinear points fail)."""
+    control = np.asarray(control, dtype=np.float64)
+    if control.shape != (4, 4, 3):
+        return f"must be 4 × 4 points [x, y, z], got an array of shape {control.shape}"
+    if not np.all(np.isfinite(control)):
+        return "control points must be finite numbers"
+    size = float(np.ptp(control.reshape(-1, 3), axis=0).max())
+    if not size > 0:
+        return "all control points coincide; the patch is a single point"
+    u, v = np.meshgrid(np.linspace(0, 1, 17), np.linspace(0, 1, 17), indexing="xy")
+    fu, fv = BezierPatch(control).derivatives(u, v)
+    bad = np.linalg.norm(np.cross(fu, fv), axis=-1) <= 1e-9 * size * size
+    if np.any(bad):
+        j, i = np.argwhere(bad)[0]
+        return (
+            f"the patch is degenerate at (u, v) = ({u[j, i]:.3g}, {v[j, i]:.3g}): f_u × f_v = 0 there "
+            "(coincident or collinear control points), so it has no normal"
+        )
+    return None
+
+
+def bezier_surface(control_points) -> BezierPatch:
+    """The exact patch of a ``bezier`` mesh (shared by the mesh and the reflection code)."""
+    control = np.asarray(control_points, dtype=np.float64)
+    problem = bezier_degeneracy(control)
+    if problem:
+        raise SceneError(problem, field="control_points")
+    return BezierPatch(control)
+
+
+def bezier(control_points, segments: tuple[int, int] = (32, 32)) -> MeshData:
+    """A bicubic Bézier patch sampled on a ``(n_u + 1) × (n_v + 1)`` grid of (u, v) ∈ [0, 1]².
+
+    Parameters
+    ----------
+    control_points : 4 × 4 × 3
+        ``control_points[i][j]`` weighs the Bernstein polynomials ``B_i(u) B_j(v)``: the outer list runs
+        along u, the inner along v (:class:`reflets.reflections.surfaces.BezierPatch`).
+    segments : (n_u, n_v)
+        Grid cells (>= 1 each).
+
+    Notes
+    -----
+    The front side is the one ``f_u × f_v`` points to: seen from it, u runs to the right and v up (the net
+    ``P00 → P30 → P33`` turns counter-clockwise). uv is exactly the patch parameter (the reference starts
+    its Newton refinement there); normal ``unit(f_u × f_v)``, tangent ``unit(f_u)``, ``w = +1``.
+    """
+    nu, nv = _pair("bezier", "segments", segments, (1, 1))
+    return _patch_mesh(bezier_surface(control_points), nu, nv, "control_points")
+
+
+# --------------------------------------------------------------------------------------------- height field
+def heights_problem(heights: np.ndarray) -> str | None:
+    """Why an array is not a usable height grid (None if it is)."""
+    if heights.ndim != 2:
+        return f"heights must be a 2D array (rows along z, columns along x), got {heights.ndim} dimensions"
+    if heights.shape[0] < 2 or heights.shape[1] < 2:
+        return f"heights need at least 2 × 2 samples, got {heights.shape[0]} × {heights.shape[1]}"
+    if not np.all(np.isfinite(heights)):
+        return "heights must be finite (found NaN or inf)"
+    return None
+
+
+def load_heights(path: str | Path) -> np.ndarray:
+    """A height grid from a NumPy ``.npy`` file, float64; SceneError naming ``file`` otherwise.
+
+    .npy rather than an image: heights are data, not colours — an image would be quantised (8 or 16 bits) and,
+    for PNG, sRGB-decoded by the image readers, so the scene author could not write exact heights."""
+    path = Path(path)
+    if path.suffix.lower() != ".npy":
+        raise SceneError(f"height fields are read from NumPy .npy files, got {path.name!r}", file=path, field="file")
+    if not path.is_file():
+        raise SceneError("height-field file not found", file=path, field="file")
+    try:
+        grid = np.load(path, allow_pickle=False)
+    except (OSError, ValueError) as exc:
+        raise SceneError(f"cannot read as a .npy array ({exc})", file=path, field="file") from None
+    if not (np.issubdtype(grid.dtype, np.integer) or np.issubdtype(grid.dtype, np.floating)):
+        raise SceneError(f"heights must be real numbers, the file holds {grid.dtype}", file=path, field="file")
+    grid = grid.astype(np.float64)
+    problem = heights_problem(grid)
+    if problem:
+        raise SceneError(problem, file=path, field="file")
+    return grid
+
+
+def heightfield_surface(
+    heights=None, file=None, size: tuple[float, float] | float = (1.0, 1.0), height_scale: float = 1.0
+) -> HeightField:
+    """The exact surface of a ``heightfield`` mesh: ``y = height_scale · h(x, z)``, Catmull–Rom bicubic.
+
+    Row 0 of the grid is at z = −d/2, so the rows are reversed into HeightField's v (which runs along −z
+    like the plane's, making ``f_u × f_v`` point to +y)."""
+    w, d = _sizes("heightfield", "size", size, 2)
+    if (heights is None) == (file is None):
+        raise SceneError("give exactly one of heights (inline 2D array) or file (a .npy file)", field="heights")
+    if heights is not None:
+        grid = np.asarray(heights, dtype=np.float64)
+        problem = heights_problem(grid)
+        if problem:
+            raise SceneError(problem, field="heights")
+    else:
+        grid = load_heights(file)
+    scale = float(height_scale)
+    if not math.isfinite(scale):
+        raise SceneError(f"must be a finite number, got {height_scale!r}", field="height_scale")
+    return HeightField(scale * grid[::-1], (-0.5 * w, 0.5 * w), (0.5 * d, -0.5 * d), up="y")
+
+
+def heightfield(
+    heights=None,
+    file=None,
+    size: tuple[float, float] | float = (1.0, 1.0),
+    height_scale: float = 1.0,
+    segments: tuple[int, int] | None = None,
+) -> MeshData:
+    """A height field ``y = height_scale · h(x, z)`` over the rectangle ``size = (w, d)`` centred at the origin.
+
+    Parameters
+    ----------
+    heights : 2D array (n_z, n_x), or None
+        Samples; ``heights[r][c]`` is at ``x = −w/2 + c w/(n_x − 1)``, ``z = −d/2 + r d/(n_z − 1)`` (row 0 at the
+        far edge seen from a camera looking down −z, like an image laid on a :func:`plane`).
+    file : path of a .npy file, or None
+        The same grid from a file (exactly one of heights and file).
+    segments : (n_x, n_z) or None
+        Grid cells; default one vertex per sample (n_x − 1, n_z − 1). Between samples the surface is the
+        Catmull–Rom bicubic interpolant (:class:`reflets.reflections.surfaces.HeightField`), so a finer mesh
+        follows the same surface.
+
+    Notes
+    -----
+    uv as on :func:`plane`: u along +x, v along −z (uv (0, 0) at (−w/2, ·, +d/2)); the normal
+    ``unit(f_u × f_v)`` has a positive y component; tangent ``unit(f_u)``, ``w = +1``.
+    """
+    surface = heightfield_surface(heights, file, size, height_scale)
+    n_z, n_x = surface.heights.shape
+    nu, nv = (n_x - 1, n_z - 1) if segments is None else _pair("heightfield", "segments", segments, (1, 1))
+    return _patch_mesh(surface, nu, nv, "heights" if file is None else "file")
+
+
 SHAPES: dict[str, Callable[..., MeshData]] = {
     "plane": plane,
     "sphere": sphere,
     "cube": cube,
     "cylinder": cylinder,
     "torus": torus,
+    "bezier": bezier,
+    "heightfield": heightfield,
 }
 """Shape name (as written in scene files) → builder."""
