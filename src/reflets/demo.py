@@ -91,6 +91,7 @@ DEMO: list[DemoEntry] = [
         visibility=False,
         reference_spp=1,
     ),
+    DemoEntry("42_reflect_bezier.toml", (Method("fermat"),), reference=True, visibility=False, reference_spp=1),
     DemoEntry(
         "41_reflect_room.toml", (Method("fermat"), Method("forward")), reference=True, visibility=False, reference_spp=8
     ),

@@ -244,3 +244,14 @@ def test_sampled_reflector_is_its_numpy_twin_and_converges_with_resolution(ctx):
         assert ok[away].mean() > 0.95
         errors.append(np.abs(gpu["position"] - exact)[ok].max())
     assert errors[1] < errors[0] / 10 and errors[1] < 1e-4, errors
+
+
+def test_bezier_mirror_matches_the_ray_traced_reference(ctx):
+    """A curved Bézier patch, solved on its sampled texture, against the reference's exact parametric surface."""
+    scene = reflets.load_scene(scenes_dir() / "42_reflect_bezier.toml")
+    size = (160, 120)
+    image = reflets.render(scene, method="fermat", size=size)
+    ref = reflets.reference(scene, spp=1, size=size, visibility=False, progress=False)
+    assert relmse(image, ref.image) < 0.03
+    assert flip(image, ref.image) < 0.03
+    assert relmse(reflets.render(scene, size=size), ref.image) > 5 * relmse(image, ref.image)

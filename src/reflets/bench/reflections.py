@@ -4,7 +4,8 @@
    reflection on a sphere, an ellipsoid, a torus and a cylinder): fraction converged (law-of-reflection
    residual < 1e-5) after 1…10 iterations, for the robust solver and the document's (global chart, and the
    note's local chart); the GPU solver's rates (float32, residual < 1e-4) at 4, 5 and 8 iterations.
-2. **Scenes** (the teapot by a chrome sphere, ~2,500 triangles; the room with a chrome ellipsoid, ~18,000),
+2. **Scenes** (the teapot by a chrome sphere, ~2,500 triangles; the room with a chrome ellipsoid, ~18,000;
+   the teapot in a curved Bézier mirror, solved on its sampled texture),
    for each solver × reflected-mesh subdivision (1, 4, auto): median frame time (draw only), the
    ``forward`` frame for scale, reflected vertices per frame and per second, the fraction of reflected
    vertices whose solution converged, relative MSE and FLIP against the ray-traced reference.
@@ -26,7 +27,11 @@ import numpy as np
 
 from . import register_suite
 
-SCENES = {"teapot + sphere": "40_reflect_teapot_sphere.toml", "room + ellipsoid": "41_reflect_room.toml"}
+SCENES = {
+    "teapot + sphere": "40_reflect_teapot_sphere.toml",
+    "room + ellipsoid": "41_reflect_room.toml",
+    "teapot + Bézier mirror": "42_reflect_bezier.toml",
+}
 SOLVERS = ("robust", "document")
 SUBDIVISIONS = (1, 4, "auto")
 EDGE_SEGMENTS = (1, 4, 16, 64)
