@@ -95,6 +95,9 @@ DEMO: list[DemoEntry] = [
     DemoEntry(
         "41_reflect_room.toml", (Method("fermat"), Method("forward")), reference=True, visibility=False, reference_spp=8
     ),
+    DemoEntry("50_brushed_plate.toml", (Method("scratches", spp=128), Method("forward"))),
+    DemoEntry("51_scratched_plate.toml", (Method("scratches", spp=64), Method("forward"))),
+    DemoEntry("52_scratched_teapot.toml", (Method("scratches", spp=64), Method("forward"))),
 ]
 
 

@@ -18,9 +18,22 @@ from .phong import Phong
 from .translucent import Translucent
 from .ward import Ward
 
+# isort: split
+from ..scratches.material import Scratched  # registered after the base materials it nests
+
 #: the scene-file form of any registered material, chosen by its ``type`` key
 MaterialSpec = Annotated[
-    Lambert | Phong | BlinnPhong | Lafortune | Ward | AshikhminShirley | Microfacet | Measured | Translucent | Mirror,
+    Lambert
+    | Phong
+    | BlinnPhong
+    | Lafortune
+    | Ward
+    | AshikhminShirley
+    | Microfacet
+    | Measured
+    | Translucent
+    | Mirror
+    | Scratched,
     Field(discriminator="type"),
 ]
 
@@ -39,4 +52,5 @@ __all__ = [
     "Measured",
     "Translucent",
     "Mirror",
+    "Scratched",
 ]

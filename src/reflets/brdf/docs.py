@@ -61,6 +61,7 @@ PROPERTIES = {
     "measured": ("yes (φd folding)", "not guaranteed (measured noise, extrapolation near grazing)"),
     "translucent": ("yes", "yes (F_R + F_T·R_total ≤ 1; the far-field BRDF of the medium, see translucency.md)"),
     "mirror": ("yes", "diffuse + reflectance ≤ 1 (checked); the delta lobe is traced by fermat / the reference"),
+    "scratched": ("as its base", "as its base (finite part: base × its mean uncovered share; lobes: `scratches`)"),
 }
 
 
