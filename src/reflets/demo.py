@@ -38,7 +38,7 @@ class Method:
 
     @property
     def label(self) -> str:
-        extra = ",".join(f"{k}={v}" for k, v in self.params) + (f",spp={self.spp}" if self.spp > 1 else "")
+        extra = ",".join([f"{k}={v}" for k, v in self.params] + ([f"spp={self.spp}"] if self.spp > 1 else []))
         return self.name + (f"[{extra}]" if extra else "")
 
 
