@@ -96,6 +96,16 @@ def _frame_inverse(frame: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.nda
     return u, v
 
 
+def _by_order(contract, order: int) -> list[np.ndarray]:
+    """``[f]``, then ``f_u, f_v``, then ``f_uu, f_uv, f_vv`` from ``contract(a, b)`` = ∂^{a+b} f / ∂u^a ∂v^b."""
+    out = [contract(0, 0)]
+    if order >= 1:
+        out += [contract(1, 0), contract(0, 1)]
+    if order >= 2:
+        out += [contract(2, 0), contract(1, 1), contract(0, 2)]
+    return out
+
+
 # ------------------------------------------------------------------------------------------- cubic grids
 def _catmull_rom(t: np.ndarray, order: int) -> np.ndarray:
     """Catmull–Rom weights of the 4 nodes around a cell (or their 1st / 2nd derivatives), shape (..., 4)."""
@@ -176,12 +186,7 @@ class GridInterpolator:
         def contract(a: int, b: int) -> np.ndarray:
             return np.einsum("...j,...i,...jic->...c", wv[b], wu[a], patch) * (su**a * sv**b)
 
-        out = [contract(0, 0)]
-        if order >= 1:
-            out += [contract(1, 0), contract(0, 1)]
-        if order >= 2:
-            out += [contract(2, 0), contract(1, 1), contract(0, 2)]
-        return out
+        return _by_order(contract, order)
 
 
 # ---------------------------------------------------------------------------------------------- surfaces
@@ -590,12 +595,7 @@ class BezierPatch(Surface):
         def contract(a: int, b: int) -> np.ndarray:
             return np.einsum("...i,...j,ijc->...c", bu[a], bv[b], self.control)
 
-        out = [contract(0, 0)]
-        if order >= 1:
-            out += [contract(1, 0), contract(0, 1)]
-        if order >= 2:
-            out += [contract(2, 0), contract(1, 1), contract(0, 2)]
-        return out
+        return _by_order(contract, order)
 
     @property
     def interior(self):
