@@ -29,7 +29,7 @@ from ..errors import ArgumentError
 from ..gpu import FrameTimer, HDRTarget, ProgramSpec, get_program, set_uniforms
 from ..scene.environment import environment_grid, load_environment, rotation_y
 from ..scene.geometry import clip_planes, mesh_data
-from ..scene.lightmask import load_mask, load_masks, mask_lookup, quad_uv
+from ..scene.lightmask import load_masks, mask_lookup, quad_uv
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
 from .base import Technique, TechniqueParams, register_technique
@@ -119,6 +119,7 @@ class Forward(Technique):
         self.scene = scene
         self._objects = []
         points = []  # every mesh vertex and light corner: the clip planes must hold them all
+        self._masks = load_masks(scene)  # read once: the area samples, polygon records and emitters use them
 
         points_l, dirs, area, emitters, emitter_indices = [], [], [], [], []
         for light_index, light in enumerate(scene.light):
@@ -166,7 +167,7 @@ class Forward(Technique):
             self._draws.append((program, vao, uniforms, textures))
 
         self._emitters = []
-        masks = load_masks(scene)
+        masks = self._masks
         for index, (poly, light) in zip(emitter_indices, emitters, strict=True):
             tri = np.array([[poly[0], poly[k], poly[k + 1]] for k in range(1, len(poly) - 1)]).reshape(-1, 3)
             uv = np.stack(quad_uv(light, tri), axis=-1) if isinstance(light, QuadLight) else np.zeros((len(tri), 2))
@@ -228,7 +229,7 @@ class Forward(Technique):
         n = self.params.area_samples
         pts, dA = area_light_samples(poly, n)
         weight = np.ones(len(pts))
-        mask = load_mask(self.scene, next(i for i, x in enumerate(self.scene.light) if x is light))
+        mask = self._masks.get(self.scene.light.index(light))
         if mask is not None:  # a quad: the n × n grid in area_light_samples' order; masked-out samples dropped
             t = (np.arange(n) + 0.5) / n
             u, v = np.meshgrid(t, t, indexing="xy")

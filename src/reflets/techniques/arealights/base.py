@@ -30,7 +30,6 @@ from pydantic import Field
 
 from ...errors import ArgumentError, SceneError
 from ...gpu import ProgramSpec
-from ...scene.lightmask import load_masks
 from ...scene.model import PolygonLight, QuadLight, Scene
 from ..forward import LIGHT_FLAGS, Forward, ForwardParams, polygon_normal
 
@@ -145,7 +144,7 @@ class AreaLightTechnique(Forward):
 
     def polygon_rows(self, scene: Scene) -> list[tuple]:
         rows, texels, offset = [], [], 0
-        masks = load_masks(scene)
+        masks = self._masks  # read by Forward.prepare
         for i, light in enumerate(scene.light):
             if not isinstance(light, QuadLight | PolygonLight):
                 continue
