@@ -84,6 +84,7 @@ DEMO: list[DemoEntry] = [
     ),
     DemoEntry("31_translucent_bunny.toml", (Method("translucent"), Method("forward"))),
     DemoEntry("32_translucent_dragon.toml", (Method("translucent"),)),
+    DemoEntry("33_translucent_spheres.toml", (Method("translucent"),)),
     DemoEntry(
         "40_reflect_teapot_sphere.toml",
         (Method("fermat"), Method("fermat", (("subdivide", 1),)), Method("fermat", (("solver", "document"),))),

@@ -501,7 +501,7 @@ def write_image(path: str | Path, image: np.ndarray, *, exposure: float = 0.0, t
         payload = _encode_rgbe(rgb)
     else:
         payload = _encode_png(_tonemap_checked(rgb, stops, curve))
-    _atomic_write(p, payload)
+    atomic_write(p, payload)
     return p
 
 
@@ -526,7 +526,7 @@ def _encode_png(rgb8: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
-def _atomic_write(path: Path, payload: bytes) -> None:
+def atomic_write(path: Path, payload: bytes) -> None:
     """Write ``payload`` to a temporary sibling of ``path``, then rename it over ``path``.
 
     The temporary file lives in the same directory so that :func:`os.replace` is a same-filesystem rename,
@@ -559,5 +559,5 @@ def write_png8(path: str | Path, rgb8: np.ndarray) -> Path:
     rgb8 = np.asarray(rgb8)
     if rgb8.dtype != np.uint8 or rgb8.ndim != 3 or rgb8.shape[2] != 3:
         raise ArgumentError(f"expected uint8 (H, W, 3), got {rgb8.dtype} {rgb8.shape}", field="image", file=p)
-    _atomic_write(p, _encode_png(np.ascontiguousarray(rgb8)))
+    atomic_write(p, _encode_png(np.ascontiguousarray(rgb8)))
     return p

@@ -49,6 +49,50 @@ def test_volumetric_reference_is_deterministic_and_rejects_what_it_cannot_render
 
 
 @pytest.mark.parametrize("eta", [1.0, 1.3])
+def test_worker_processes_draw_an_equivalent_reproducible_reference(eta):
+    """Samples split over two processes: the same seed gives the same image, and it agrees with the one-process
+    image within their noise (means within 4σ of the difference)."""
+    scene = sphere_scene(eta)
+    a = render_volumetric(scene, spp=8, seed=3, size=(24, 18), workers=2, progress=False)
+    b = render_volumetric(scene, spp=8, seed=3, size=(24, 18), workers=2, progress=False)
+    one = render_volumetric(scene, spp=8, seed=5, size=(24, 18), progress=False)
+    np.testing.assert_array_equal(a.image, b.image)
+    assert np.array_equal(a.mask, one.mask) and a.spp == 8
+    m = a.mask
+    diff = a.image[m].mean(axis=0) - one.image[m].mean(axis=0)
+    sigma = np.sqrt(np.mean(a.stderr[m] ** 2 + one.stderr[m] ** 2, axis=0) / m.sum())
+    assert np.all(np.abs(diff) < 4 * sigma + 1e-4 * one.image[m].mean(axis=0)), (diff, sigma)
+
+
+def test_stored_reference_is_used_only_while_everything_matches(tmp_path):
+    """reflets.reference.store: a second call reads the stored file (no render); another seed, sample count or
+    scene renders anew; the stored image equals the rendered one to float16 rounding."""
+    from reflets.reference.store import stored_or_rendered
+
+    calls = []
+
+    def make(scene, spp, seed):
+        def render():
+            calls.append(seed)
+            return render_volumetric(scene, spp=spp, seed=seed, size=(16, 12), progress=False)
+
+        return render
+
+    path = tmp_path / "refs" / "sphere.npz"
+    scene = sphere_scene()
+    first, info = stored_or_rendered(path, scene, make(scene, 2, 1), spp=2, seed=1)
+    again, info2 = stored_or_rendered(path, scene, make(scene, 2, 1), spp=2, seed=1)
+    assert calls == [1] and not info["stored"] and info2["stored"] and info2["fingerprint"] == info["fingerprint"]
+    np.testing.assert_array_equal(first.mask, again.mask)
+    np.testing.assert_allclose(again.image, first.image, rtol=1e-3, atol=1e-7)
+    np.testing.assert_allclose(again.stderr, first.stderr, rtol=1e-3, atol=1e-7)
+    stored_or_rendered(path, scene, make(scene, 2, 2), spp=2, seed=2)
+    other = sphere_scene(eta=1.3)
+    stored_or_rendered(path, other, make(other, 2, 2), spp=2, seed=2)
+    assert calls == [1, 2, 2]
+
+
+@pytest.mark.parametrize("eta", [1.0, 1.3])
 def test_single_scattering_through_a_refracting_boundary_matches_hanrahan_krueger(eta):
     """One scattering event (orders = 1) under a 100 mm flat top lit at 37° and seen at 45°: the manifold
     connection to the light through the boundary (Snell, F_T, beam compression) and the camera's own refraction

@@ -199,6 +199,7 @@ def render_volumetric(
     progress: bool = True,
     refract: bool | None = None,
     orders: int | None = None,
+    workers: int = 1,
 ) -> VolumetricImage:
     """Volumetric path tracing of a homogeneous translucent medium inside the scene's closed meshes, lit by one
     point or directional light: the ground truth of the ``translucent`` technique (all orders of scattering).
@@ -213,47 +214,84 @@ def render_volumetric(
     and Snell at every crossing, and the light reached through the boundary by a manifold connection
     (:func:`_refracted_connection`). There the camera ray's own reflection is left out (the image is the light
     that leaves the medium towards the camera: the technique's ``single`` + ``multiple`` terms). ``orders``
-    caps the scattering events per path (1: single scattering only)."""
-    from ..reference.geometry import MESHES, SceneGeometry
-    from ..scene.camera import pixel_rays
-    from ..scene.model import DirectionalLight
+    caps the scattering events per path (1: single scattering only).
 
-    material, light = _check_volumetric_scene(scene)
+    ``workers > 1`` splits the samples over that many processes (a reference at the document's 1024×768 takes
+    an hour of one core): each block of samples draws from its own child of ``seed``'s SeedSequence
+    (reproducible for a given ``seed``, ``spp`` and ``workers``)."""
+    _check_volumetric_scene(scene)
     if size is not None:
         scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"size": tuple(size)})})
-    geometry = SceneGeometry(scene)
-    medium = material.medium()
-    scale = material.mm_per_unit  # σ per mm → per scene unit
-    origin, dirs = pixel_rays(scene.camera)
-    h, w = dirs.shape[:2]
-    dirs = dirs.reshape(-1, 3)
-    hits = geometry.intersect(np.broadcast_to(origin, dirs.shape), dirs)
-    mask = hits.kind == MESHES
-    pix = np.nonzero(mask)[0]
-    entry = origin + dirs[pix] * hits.t[pix, None]
-    rng = np.random.default_rng(seed)
-    total = np.zeros((len(pix), 3))
-    total2 = np.zeros((len(pix), 3))
-    directional = isinstance(light, DirectionalLight)
-    if directional:
-        to_light = -np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
-        power = np.asarray(light.irradiance, np.float64)
+    job = _VolumetricJob(scene, refract, orders)
+    if workers > 1:
+        # samples per task: what one batch holds, and at least four tasks per worker
+        block = max(1, min(300_000 // max(3 * len(job.pix), 1), -(-spp // (4 * workers))))
+        total, total2 = _sums_in_processes(scene, refract, orders, spp, block, seed, workers, progress)
     else:
-        light_pos = np.asarray(light.position, np.float64)
-        power = np.asarray(light.intensity, np.float64)
-    refracting = abs(material.eta - 1.0) > 1e-9 if refract is None else refract
-    if refracting:
-        total, total2 = _render_refracting(
-            geometry, medium, scale, light, dirs[pix], hits, pix, spp, rng, orders, progress
-        )
-    with Progress(disable=not progress or refracting, transient=True) as bar:
-        task = bar.add_task("volumetric reference", total=spp * 3)
-        for _ in range(0 if refracting else spp):
+        with Progress(disable=not progress, transient=True) as bar:
+            task = bar.add_task(job.label, total=spp)
+            total, total2 = job.sums(spp, np.random.default_rng(seed), lambda k: bar.advance(task, k))
+    mean = total / spp
+    var = np.maximum(total2 / spp - mean * mean, 0.0) / max(spp - 1, 1)
+    h, w = job.shape
+    image = np.zeros((h * w, 3), np.float32)
+    err = np.zeros((h * w, 3), np.float32)
+    image[job.pix] = mean
+    err[job.pix] = np.sqrt(var)
+    return VolumetricImage(image.reshape(h, w, 3), err.reshape(h, w, 3), job.mask.reshape(h, w), spp)
+
+
+class _VolumetricJob:
+    """One scene's camera rays, geometry and light, ready to draw samples (rebuilt in each worker process)."""
+
+    def __init__(self, scene, refract, orders):
+        from ..reference.geometry import MESHES, SceneGeometry
+        from ..scene.camera import pixel_rays
+
+        material, self.light = _check_volumetric_scene(scene)
+        self.geometry = SceneGeometry(scene)
+        self.medium = material.medium()
+        self.scale = material.mm_per_unit  # σ per mm → per scene unit
+        self.orders = orders
+        origin, dirs = pixel_rays(scene.camera)
+        self.shape = dirs.shape[:2]
+        self.dirs = dirs.reshape(-1, 3)
+        self.hits = self.geometry.intersect(np.broadcast_to(origin, self.dirs.shape), self.dirs)
+        self.mask = self.hits.kind == MESHES
+        self.pix = np.nonzero(self.mask)[0]
+        self.entry = origin + self.dirs[self.pix] * self.hits.t[self.pix, None]
+        self.refracting = abs(material.eta - 1.0) > 1e-9 if refract is None else refract
+        self.label = "volumetric reference" + (" (refracting boundary)" if self.refracting else "")
+
+    def sums(self, spp: int, rng, advance) -> tuple[np.ndarray, np.ndarray]:
+        """Per-pixel Σ and Σ² over ``spp`` samples (P, 3); ``advance(k)`` after every k samples done."""
+        if self.refracting:
+            return _render_refracting(
+                self.geometry, self.medium, self.scale, self.light, self.dirs[self.pix], self.hits, self.pix,
+                spp, rng, self.orders, advance,
+            )  # fmt: skip
+        return self._sums_index_matched(spp, rng, advance)
+
+    def _sums_index_matched(self, spp, rng, advance):
+        from ..scene.model import DirectionalLight
+
+        geometry, medium, light, pix, orders = self.geometry, self.medium, self.light, self.pix, self.orders
+        dirs = self.dirs
+        total = np.zeros((len(pix), 3))
+        total2 = np.zeros((len(pix), 3))
+        directional = isinstance(light, DirectionalLight)
+        if directional:
+            to_light = -np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
+            power = np.asarray(light.irradiance, np.float64)
+        else:
+            light_pos = np.asarray(light.position, np.float64)
+            power = np.asarray(light.intensity, np.float64)
+        for _ in range(spp):
             for c in range(3):
-                sigma_t = float(medium.sigma_t[c]) * scale
+                sigma_t = float(medium.sigma_t[c]) * self.scale
                 albedo = float(medium.albedo[c])
                 n = len(pix)
-                pos = entry + dirs[pix] * geometry.epsilon
+                pos = self.entry + dirs[pix] * geometry.epsilon
                 d = dirs[pix].copy()
                 wgt = np.ones(n)
                 acc = np.zeros(n)
@@ -294,14 +332,47 @@ def render_volumetric(
                     idx = stay[wgt[stay] > 0.0]
                 total[:, c] += acc
                 total2[:, c] += acc * acc
-                bar.advance(task)
-    mean = total / spp
-    var = np.maximum(total2 / spp - mean * mean, 0.0) / max(spp - 1, 1)
-    image = np.zeros((h * w, 3), np.float32)
-    err = np.zeros((h * w, 3), np.float32)
-    image[pix] = mean
-    err[pix] = np.sqrt(var)
-    return VolumetricImage(image.reshape(h, w, 3), err.reshape(h, w, 3), mask.reshape(h, w), spp)
+            advance(1)
+        return total, total2
+
+
+_WORKER_JOB: _VolumetricJob | None = None
+
+
+def _init_worker(scene, refract, orders) -> None:
+    global _WORKER_JOB
+    _WORKER_JOB = _VolumetricJob(scene, refract, orders)
+
+
+def _worker_sums(spp: int, seed) -> tuple[int, np.ndarray, np.ndarray]:
+    total, total2 = _WORKER_JOB.sums(spp, np.random.default_rng(seed), lambda k: None)
+    return spp, total, total2
+
+
+def _sums_in_processes(scene, refract, orders, spp: int, block: int, seed: int, workers: int, progress: bool):
+    """Σ and Σ² over ``spp`` samples drawn in ``workers`` processes, in blocks of ``block`` samples, each with
+    its own seed."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    blocks = [min(block, spp - start) for start in range(0, spp, block)]
+    seeds = np.random.SeedSequence(seed).spawn(len(blocks))
+    total = total2 = 0.0
+    # fork where there is one: scripts and notebooks without a __main__ guard work (the workers touch no GL)
+    context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+    with (
+        ProcessPoolExecutor(
+            workers, mp_context=context, initializer=_init_worker, initargs=(scene, refract, orders)
+        ) as pool,
+        Progress(disable=not progress, transient=True) as bar,
+    ):
+        task = bar.add_task(f"volumetric reference ({workers} processes)", total=spp)
+        for future in as_completed([pool.submit(_worker_sums, k, s) for k, s in zip(blocks, seeds, strict=True)]):
+            k, t, t2 = future.result()
+            total = total + t
+            total2 = total2 + t2
+            bar.advance(task, k)
+    return total, total2
 
 
 # ------------------------------------------------------------------------------ refracting boundary (η ≠ 1)
@@ -508,26 +579,24 @@ def _hit_points(geometry, prim, u, v, d) -> _HitPoints:
     return _HitPoints(np.sum(w * p, axis=-2), n * flip, ng * flip)
 
 
-def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng, orders, progress):
+def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng, orders, advance):
     """All samples and channels of the refracting walk as one batch (chunked): per-path coefficients, so that
     the long tail of the walks runs on large arrays. Returns per-pixel Σ and Σ² of the samples (P, 3)."""
     n = len(pix)
     total = np.zeros((n, 3))
     total2 = np.zeros((n, 3))
     per_chunk = max(1, 300_000 // max(3 * n, 1))
-    with Progress(disable=not progress, transient=True) as bar:
-        task = bar.add_task("volumetric reference (refracting boundary)", total=spp)
-        done = 0
-        while done < spp:
-            k = min(per_chunk, spp - done)
-            channel = np.tile(np.repeat(np.arange(3), n), k)
-            pixel = np.tile(np.arange(n), 3 * k)
-            acc = _walk_refracting(geometry, medium, channel, scale, light, dirs[pixel], hits, pix[pixel], rng, orders)
-            acc = acc.reshape(k, 3, n)
-            total += acc.sum(axis=0).T
-            total2 += (acc * acc).sum(axis=0).T
-            done += k
-            bar.advance(task, k)
+    done = 0
+    while done < spp:
+        k = min(per_chunk, spp - done)
+        channel = np.tile(np.repeat(np.arange(3), n), k)
+        pixel = np.tile(np.arange(n), 3 * k)
+        acc = _walk_refracting(geometry, medium, channel, scale, light, dirs[pixel], hits, pix[pixel], rng, orders)
+        acc = acc.reshape(k, 3, n)
+        total += acc.sum(axis=0).T
+        total2 += (acc * acc).sum(axis=0).T
+        done += k
+        advance(k)
     return total, total2
 
 

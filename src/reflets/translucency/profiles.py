@@ -149,9 +149,10 @@ def glsl_uniforms(profile: str, medium: Medium) -> dict[str, tuple]:
     }
 
 
-def capture_radius(profile: str, medium: Medium, fraction: float = 0.99) -> float:
-    """The radius (mm) within which ``fraction`` of every channel's total reflectance R_total lies: the sampling
-    radius a ring integral needs (low-absorption media such as marble spread over tens of mean free paths)."""
+def capture_radii(profile: str, medium: Medium, fraction: float = 0.99) -> np.ndarray:
+    """Per channel, the radius (mm) within which ``fraction`` of that channel's total reflectance R_total lies:
+    the sampling radius a ring integral needs (low-absorption media such as marble spread over tens of mean
+    free paths)."""
     mfp = float(np.max(medium.mean_free_path))
     r = np.geomspace(1e-6 * mfp, 1e4 * mfp, 4001)
     f = 2.0 * np.pi * r[:, None] * profile_rd(profile, r[:, None], medium).reshape(len(r), -1)
@@ -159,4 +160,9 @@ def capture_radius(profile: str, medium: Medium, fraction: float = 0.99) -> floa
         [np.zeros((1, f.shape[1])), np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(r)[:, None], axis=0)]
     )
     cumulative /= cumulative[-1]
-    return float(max(np.interp(fraction, cumulative[:, c], r) for c in range(f.shape[1])))
+    return np.array([np.interp(fraction, cumulative[:, c], r) for c in range(f.shape[1])])
+
+
+def capture_radius(profile: str, medium: Medium, fraction: float = 0.99) -> float:
+    """The widest channel's :func:`capture_radii`: one radius that serves the three channels."""
+    return float(np.max(capture_radii(profile, medium, fraction)))

@@ -13,7 +13,8 @@ Passes per frame:
      Snell-corrected, integrated by the trapezoid rule (``ss_rule = "step"``: the document's biased sum);
    - **multiple scattering**: R_d (dipole, better dipole or normalised diffusion) integrated over ``rings`` ×
      ``angles`` nodes in the plane through the point orthogonal to the light, radii r_max f_β(j/K) (β fitted
-     per material), each node's value R_d(true distance to the surface point the light sees) × transmitted
+     per material; ``ring_sets = "per_channel"``: β and r_max per channel, as the document, three times the
+     light-map reads), each node's value R_d(true distance to the surface point the light sees) × transmitted
      flux density, summed with the exact weights of the document's bilinear cell integral (``ms_quadrature =
      "bilinear"``) or, by default, of product integration (R_d integrated exactly per ring, the first ring's
      disc in closed form per direction; rings.py, translucent.frag), then × F_T(ω_o)/(πc).
@@ -53,7 +54,7 @@ from ...scene.geometry import bounding_sphere, mesh_data
 from ...scene.model import DirectionalLight, PointLight, Scene
 from ...scene.transform import look_at, perspective
 from ...translucency.optics import diffuse_normalisation
-from ...translucency.profiles import PROFILES, capture_radius, glsl_uniforms, profile_rd
+from ...translucency.profiles import PROFILES, capture_radii, glsl_uniforms, profile_rd
 from ...translucency.single import march_depths, quadrature_weights
 from ..base import register_technique
 from ..forward import LIGHT_FLAGS, Forward, ForwardParams
@@ -82,6 +83,7 @@ TRANSLUCENT_PROGRAM = ProgramSpec(
             "VIEW_BLEND",
             "CURVATURE_REJECTION",
             "REFRACTION",
+            "RING_SETS",
             "OUTPUT",
         }
     )
@@ -108,6 +110,12 @@ class TranslucencyParams(ForwardParams):
         "None: the radius holding 99 % of the profile's total reflectance",
     )
     beta: float | None = Field(None, ge=0, le=rings_module.BETA_MAX, description="ring spacing β (None: fitted)")
+    ring_sets: Literal["shared", "per_channel"] = Field(
+        "shared",
+        description="one ring layout for the three channels (β fitted on the luminance-weighted profile, the "
+        "widest channel's radius) or one per channel (β and radius fitted to each channel's profile, as the "
+        "document; three times the light-map reads)",
+    )
     ms_quadrature: Literal["product", "bilinear"] = Field(
         "product",
         description="multiple scattering: bilinear cells (the document) or product integration (R_d integrated "
@@ -245,6 +253,7 @@ class Translucency(Forward):
             "VIEW_BLEND": int(p.view_blend is not None),
             "CURVATURE_REJECTION": int(p.curvature_rejection is not None),
             "REFRACTION": REFRACTION_MODES[p.refraction],
+            "RING_SETS": 3 if p.ring_sets == "per_channel" else 1,
         }
 
     def _terms(self, material: Translucent) -> int:
@@ -256,17 +265,7 @@ class Translucency(Forward):
             return {}
         p = self.params
         medium = material.medium()
-        mfp = float(np.max(medium.mean_free_path))  # mm, the widest channel
-        r_max_mm = p.radius_mfp * mfp if p.radius_mfp is not None else capture_radius(material.profile, medium)
-        beta = p.beta
-        if beta is None:
-            weights = np.array([0.2126, 0.7152, 0.0722])
-
-            def rd(r_mm):
-                return profile_rd(material.profile, np.asarray(r_mm)[..., None], medium) @ weights
-
-            beta = rings_module.fit_beta(rd, r_max_mm)
-        radii_mm = rings_module.ring_radii(r_max_mm, p.rings, beta)
+        radii_mm = self._ring_radii(material, medium)
         depths = march_depths(p.k_max, p.c_l)
         light = self._light
         light_vector = (
@@ -287,7 +286,7 @@ class Translucency(Forward):
             "a_ss_c_l": float(p.c_l),
             "a_ss_step": float(p.ss_rule == "step"),
             "u_background": tuple(float(v) for v in (self.scene.background_color() or (0.0, 0.0, 0.0))),
-            "a_ring_radius": (radii_mm / material.mm_per_unit).astype(np.float32).tobytes(),
+            "a_ring_radius": (radii_mm.ravel() / material.mm_per_unit).astype(np.float32).tobytes(),
             **self._ring_uniforms(material, medium, radii_mm),
             "u_light_view_proj": self._light_view_proj.T.astype(np.float32).tobytes(),
             "u_light_vector": tuple(float(v) for v in light_vector),
@@ -297,21 +296,47 @@ class Translucency(Forward):
             "a_curvature_max": float(p.curvature_rejection or 0.0),
         }
 
-    def _ring_uniforms(self, material, medium, radii_mm: np.ndarray) -> dict[str, object]:
+    def _ring_radii(self, material, medium) -> np.ndarray:
+        """Ring radii ρ_0 = 0 … ρ_K in mm, one row per ring set: r_max from ``radius_mfp`` (× the mean free
+        path) or the capture radius, β fitted (∫|g''|) on the set's profile — the luminance-weighted one for a
+        shared set (the widest channel's radius), each channel's own per channel."""
         p = self.params
-        if p.ms_quadrature == "bilinear":
-            weights = np.repeat(rings_module.ring_weights(radii_mm, p.angles)[:, None], 3, axis=1)
-            inv_rd = np.ones_like(weights)
-        else:
+        mfp = np.asarray(medium.mean_free_path, np.float64)  # mm
+        r_max = p.radius_mfp * mfp if p.radius_mfp is not None else capture_radii(material.profile, medium)
+        weights = np.eye(3)
+        if p.ring_sets == "shared":
+            weights, r_max = np.array([[0.2126, 0.7152, 0.0722]]), np.array([np.max(r_max)])
+        radii = []
+        for w, radius in zip(weights, r_max, strict=True):
+            beta = p.beta
+            if beta is None:
 
-            def rd(r):
-                return profile_rd(material.profile, np.asarray(r)[..., None], medium)
+                def rd(r_mm, w=w):
+                    return profile_rd(material.profile, np.asarray(r_mm)[..., None], medium) @ w
 
-            weights = rings_module.product_weights(radii_mm, p.angles, rd, first_cell=False)
-            inv_rd = 1.0 / rd(np.maximum(radii_mm, 1e-9))
+                beta = rings_module.fit_beta(rd, float(radius))
+            radii.append(rings_module.ring_radii(float(radius), p.rings, beta))
+        return np.array(radii)
+
+    def _ring_uniforms(self, material, medium, radii_mm: np.ndarray) -> dict[str, object]:
+        """Per ring set (rows of ``radii_mm``), the node weights of the chosen quadrature (and 1/R_d at the ring
+        radii for the product rule), stacked set after set."""
+        p = self.params
+        weights, inv_rd = [], []
+        for radii in radii_mm:
+            if p.ms_quadrature == "bilinear":
+                weights.append(np.repeat(rings_module.ring_weights(radii, p.angles)[:, None], 3, axis=1))
+                inv_rd.append(np.ones_like(weights[-1]))
+            else:
+
+                def rd(r):
+                    return profile_rd(material.profile, np.asarray(r)[..., None], medium)
+
+                weights.append(rings_module.product_weights(radii, p.angles, rd, first_cell=False))
+                inv_rd.append(1.0 / rd(np.maximum(radii, 1e-9)))
         return {
-            "a_ring_weight": weights.astype(np.float32).tobytes(),
-            "a_ring_inv_rd": inv_rd.astype(np.float32).tobytes(),
+            "a_ring_weight": np.concatenate(weights).astype(np.float32).tobytes(),
+            "a_ring_inv_rd": np.concatenate(inv_rd).astype(np.float32).tobytes(),
         }
 
     def material_textures(self, material) -> dict[str, object]:

@@ -5,7 +5,8 @@
 // Flags: LIGHT_DIRECTIONAL, PROFILE, SS_NODES (k_max + 1), RINGS, ANGLES, TERMS (bit 1 specular, 2 single,
 // 4 multiple), MS_PRODUCT (1: product integration, 0: the document's bilinear cells), VIEW_BLEND (the
 // document's light-/camera-view blend), CURVATURE_REJECTION (the document's rejection of nodes past a fold),
-// REFRACTION (1: image-space two-surface refraction through the back-face maps; 2: its exit point as output).
+// REFRACTION (1: image-space two-surface refraction through the back-face maps; 2: its exit point as output),
+// RING_SETS (1: one ring layout for the three channels; 3: one per channel, each integral keeping its channel).
 #include BRDF
 #include "reflets/techniques/translucency/shaders/profiles.glsl"
 
@@ -29,10 +30,11 @@ uniform float a_mm_per_unit;
 uniform vec3 a_diffuse_norm;         // 1 / (π (1 − 2 C1_out))
 uniform float a_ss_depth[SS_NODES];  // march depths in mean free paths 1/σ_t
 uniform float a_ss_weight[SS_NODES]; // their quadrature weights (same units)
-uniform float a_ring_radius[RINGS + 1];  // scene units
-uniform vec3 a_ring_weight[RINGS + 1];   // per node of ring j (bilinear: mm², the centre counting ANGLES
-                                         // copies; product: ∫ R_d ρ hat_j dρ dθ over ρ > ρ₁)
-uniform vec3 a_ring_inv_rd[RINGS + 1];   // product: 1 / R_d(ρ_j)
+// Ring set k's node j at index k (RINGS + 1) + j:
+uniform float a_ring_radius[(RINGS + 1) * RING_SETS];  // scene units
+uniform vec3 a_ring_weight[(RINGS + 1) * RING_SETS];   // per node of ring j (bilinear: mm², the centre counting
+                                                       // ANGLES copies; product: ∫ R_d ρ hat_j dρ dθ over ρ > ρ₁)
+uniform vec3 a_ring_inv_rd[(RINGS + 1) * RING_SETS];   // product: 1 / R_d(ρ_j)
 
 out vec4 f_color;
 
@@ -80,6 +82,38 @@ bool map_lookup(mat4 view_proj, sampler2D positions, sampler2D normals, vec3 p, 
 
 bool light_lookup(vec3 p, out vec3 xi, out vec3 ni) {
     return map_lookup(u_light_view_proj, u_light_position, u_light_normal, p, xi, ni);
+}
+
+// The shadow-map tolerance at a surface point of normal n: the map's texel-scale bias stretched by the slope
+// tan θ_l of the surface as the light sees it (at grazing light one texel spans a long stretch of depth, and
+// a fixed bias leaves streaks of false shadow along the terminator).
+float shadow_tolerance(vec3 x, vec3 n) {
+    float c = clamp(abs(dot(n, to_light(x))), 0.03, 1.0);
+    return u_shadow_bias * max(1.0, sqrt(1.0 - c * c) / c);
+}
+
+// Whether the light sees x (normal n) itself: the map's surface along the light ray through x lies no further
+// in front of x than the tolerance (a one-sided shadow-map test). Where the light grazes a surface its nearest
+// texel may hold the background or the surface beyond the silhouette (false shadow in teeth along the
+// terminator): then a neighbouring texel that holds x's own surface, close to x, decides.
+bool sees_light(vec3 x, vec3 n, out vec3 xi, out vec3 ni) {
+    float tolerance = shadow_tolerance(x, n);
+    if (light_lookup(x, xi, ni) && light_distance(x, xi) < tolerance) return true;
+    vec4 clip = u_light_view_proj * vec4(x, 1.0);
+    if (clip.w <= 0.0) return false;
+    vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
+    vec2 texel = 1.0 / vec2(textureSize(u_light_position, 0));
+    for (int k = 0; k < 9; ++k) {
+        if (k == 4) continue;  // the centre, tried above
+        vec2 q = uv + vec2(float(k % 3 - 1), float(k / 3 - 1)) * texel;
+        vec4 a = textureLod(u_light_position, q, 0.0);
+        if (a.w > 0.5 && light_distance(x, a.xyz) < tolerance && length(a.xyz - x) < 2.0 * tolerance) {
+            xi = a.xyz;
+            ni = textureLod(u_light_normal, q, 0.0).xyz;
+            return true;
+        }
+    }
+    return false;
 }
 
 float hg_phase(float cos_theta, float g) {
@@ -226,7 +260,7 @@ vec3 ring_node(int view, vec3 x, vec3 p, out float r, out vec3 xs, out vec3 ns, 
     if (view == 1) {
         vec3 xl, nl;
         surface = camera_lookup(p, xs, ns);
-        if (!surface || !light_lookup(xs, xl, nl) || length(xl - xs) > u_shadow_bias) return vec3(0.0);
+        if (!surface || !sees_light(xs, ns, xl, nl)) return vec3(0.0);
         if (!entering(xs, ns, beam, travel, cos_ratio)) return vec3(0.0);
         r = length(xs - x) * a_mm_per_unit;
         float cos_l = dot(ns, to_light(xs));
@@ -255,13 +289,14 @@ bool spoke_continues(vec3 x_prev, vec3 n_prev, vec3 xs, vec3 ns) {
 const float GAUSS3_T[3] = float[3](0.1127016654, 0.5, 0.8872983346);  // Gauss-Legendre on [0, 1]
 const float GAUSS3_W[3] = float[3](0.2777777778, 0.4444444444, 0.2777777778);
 
-// The profile integrated around x over the light view (view 0) or the camera view (view 1), spoke by spoke
-// (one direction at a time, centre outwards, so that curvature rejection can cut a spoke).
-vec3 profile_integral(int view, vec3 x, vec3 wo) {
+// The profile integrated around x over the light view (view 0) or the camera view (view 1) with ring set
+// `ring_set`, spoke by spoke (one direction at a time, centre outwards, so that curvature rejection can cut a spoke).
+vec3 profile_integral(int view, vec3 x, vec3 n, vec3 wo, int ring_set) {
+    int k0 = ring_set * (RINGS + 1);
     vec3 axis = view == 0 ? to_light(x) : wo;
     mat3 basis = shading_frame(axis, vec4(0.0));  // columns: two axes of the plane orthogonal to the view
     vec3 sum = vec3(0.0);
-    float rho1 = a_ring_radius[1] * a_mm_per_unit;  // mm
+    float rho1 = a_ring_radius[k0 + 1] * a_mm_per_unit;  // mm
     // The centre: where the light enters along its line through x, r_c measured along that line (0 where the
     // light sees x — |xi − x| would add the light map's lateral quantisation, which a sharp profile feels).
     float r_c;
@@ -269,8 +304,20 @@ vec3 profile_integral(int view, vec3 x, vec3 wo) {
     bool surface_c;
     vec3 beam_c = ring_node(view, x, x, r_c, xs_c, ns_c, surface_c);
     vec3 xi_c, ni_c;
-    if (view == 0 && light_lookup(x, xi_c, ni_c)) r_c = light_distance(x, xi_c) * a_mm_per_unit;
-    if (view == 1 || r_c < u_shadow_bias * a_mm_per_unit) r_c = 0.0;  // the view sees x itself
+    if (view == 1) {
+        r_c = 0.0;  // the camera sees x itself
+    } else if (sees_light(x, n, xi_c, ni_c)) {
+        r_c = 0.0;
+        if (!surface_c) {  // found in a neighbouring texel (light grazing x): the light enters at x
+            vec3 travel;
+            float cos_ratio;
+            xs_c = xi_c;
+            ns_c = ni_c;
+            surface_c = entering(xs_c, ns_c, beam_c, travel, cos_ratio);
+        }
+    } else if (surface_c) {
+        r_c = light_distance(x, xs_c) * a_mm_per_unit;  // through the medium, from where the light enters
+    }
     vec3 first_cell = vec3(0.0);                     // product rule: Σ_a ∫₀^ρ₁ R_d(r_a(ρ)) ρ dρ
     for (int a = 0; a < ANGLES; ++a) {
         float theta = TWO_PI * float(a) / float(ANGLES);
@@ -281,7 +328,7 @@ vec3 profile_integral(int view, vec3 x, vec3 wo) {
         bool alive = true;
 #endif
         for (int j = 1; j <= RINGS; ++j) {
-            vec3 p = x + a_ring_radius[j] * dir;
+            vec3 p = x + a_ring_radius[k0 + j] * dir;
             float r;
             vec3 xs, ns;
             bool surface;
@@ -296,7 +343,7 @@ vec3 profile_integral(int view, vec3 x, vec3 wo) {
 #endif
 #if MS_PRODUCT
             // R_d at the true distance relative to the plane distance's, which the weights integrate
-            sum += a_ring_weight[j] * beam * profile_rd(r) * a_ring_inv_rd[j];
+            sum += a_ring_weight[k0 + j] * beam * profile_rd(r) * a_ring_inv_rd[k0 + j];
             if (j == 1) {
                 // Inside the first ring the true distance is modelled as r(ρ)² = r_c² + k² ρ², k fitted to this
                 // direction's node (k ≥ 1: true distances are never shorter than the plane's), and the light
@@ -317,7 +364,7 @@ vec3 profile_integral(int view, vec3 x, vec3 wo) {
                 first_cell += total * ((1.0 - share) * beam_c + share * beam);
             }
 #else
-            sum += a_ring_weight[j] * beam * profile_rd(r);
+            sum += a_ring_weight[k0 + j] * beam * profile_rd(r);
 #endif
         }
     }
@@ -326,18 +373,28 @@ vec3 profile_integral(int view, vec3 x, vec3 wo) {
     // integrated per direction above.
     sum += (TWO_PI / float(ANGLES)) * first_cell;
 #else
-    sum += beam_c * profile_rd(r_c) * a_ring_weight[0] * float(ANGLES);
+    sum += beam_c * profile_rd(r_c) * a_ring_weight[k0] * float(ANGLES);
 #endif
     return sum;
 }
 
+// The integral with the shared ring set, or each channel's with its own set.
+vec3 view_integral(int view, vec3 x, vec3 n, vec3 wo) {
+#if RING_SETS == 3
+    return vec3(profile_integral(view, x, n, wo, 0).r, profile_integral(view, x, n, wo, 1).g,
+                profile_integral(view, x, n, wo, 2).b);
+#else
+    return profile_integral(view, x, n, wo, 0);
+#endif
+}
+
 vec3 multiple_scattering(vec3 x, vec3 n, vec3 wo) {
-    vec3 sum = profile_integral(0, x, wo);
+    vec3 sum = view_integral(0, x, n, wo);
 #if VIEW_BLEND
     // The document's blend: the light view where the light meets the surface squarely, the camera view where
     // the camera does (s = 1/(1 + e^{−λ((n·ω_l) − (n·ω_o))})).
     float s = 1.0 / (1.0 + exp(-a_blend_lambda * (dot(n, to_light(x)) - dot(n, wo))));
-    sum = s * sum + (1.0 - s) * profile_integral(1, x, wo);
+    sum = s * sum + (1.0 - s) * view_integral(1, x, n, wo);
 #endif
     return sum * a_diffuse_norm * (1.0 - fresnel_dielectric(dot(n, wo), m_eta));
 }
@@ -351,7 +408,7 @@ void main() {
 #if (TERMS & 1) != 0
     vec3 wl = to_light(x);
     vec3 xi, ni;
-    bool lit = light_lookup(x, xi, ni) && length(xi - x) < u_shadow_bias;
+    bool lit = sees_light(x, n, xi, ni);
     float cos_l = dot(n, wl);
     if (lit && cos_l > 0.0 && dot(n, wo) > 0.0) {
         mat3 frame = shading_frame(n, v_tangent);

@@ -1,0 +1,92 @@
+"""Stored reference images: a slow ground truth (an hour of CPU for the volumetric bunny at 1024×768) computed
+once, kept next to the benchmark results, and used again only while everything that determines it matches —
+the scene (mesh files by content, not by path), the sample count, the seed and the reference code's version (not
+the number of worker processes: another split of the same samples is an equally good reference).
+
+A stored file holds the masked pixels only, as float16 (relative rounding 5·10⁻⁴, far below any reference's
+Monte Carlo noise), with the fingerprint's inputs written out so that a reader can see what it is."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+#: bump when the volumetric reference's algorithm changes what it converges to or how it samples
+REFERENCE_VERSION = "volumetric-1"
+
+
+def _file_digest(path: str) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def fingerprint(scene, **params) -> tuple[str, dict]:
+    """A digest of the scene and the reference's parameters, and the description it was made from."""
+    description = scene.model_dump(mode="json")
+    for mesh in description.get("mesh", []):
+        if mesh.get("file"):
+            mesh["file"] = {"name": Path(mesh["file"]).name, "sha256": _file_digest(mesh["file"])}
+    description = {"scene": description, "version": REFERENCE_VERSION, **params}
+    text = json.dumps(description, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:16], description
+
+
+def save(path: Path, image, digest: str, description: dict, seconds: float) -> None:
+    from ..imageio import atomic_write
+
+    m = image.mask
+    payload = {
+        "mask": np.packbits(m.ravel()),
+        "shape": np.array(m.shape),
+        "image": image.image[m].astype(np.float16),
+        "stderr": image.stderr[m].astype(np.float16),
+        "spp": np.array(image.spp),
+        "fingerprint": np.array(digest),
+        "description": np.array(json.dumps(description)),
+        "seconds": np.array(seconds),
+    }
+    import io
+
+    buffer = io.BytesIO()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(buffer, **payload)
+    atomic_write(path, buffer.getvalue())
+
+
+def load(path: Path, digest: str):
+    """The stored image and its compute time, or None when the file is missing or made for something else."""
+    from .volumetric import VolumetricImage
+
+    if not path.exists():
+        return None
+    with np.load(path) as data:
+        if str(data["fingerprint"]) != digest:
+            return None
+        shape = tuple(int(v) for v in data["shape"])
+        mask = np.unpackbits(data["mask"])[: shape[0] * shape[1]].astype(bool).reshape(shape)
+        image = np.zeros((*shape, 3), np.float32)
+        stderr = np.zeros((*shape, 3), np.float32)
+        image[mask] = data["image"].astype(np.float32)
+        stderr[mask] = data["stderr"].astype(np.float32)
+        return VolumetricImage(image, stderr, mask, int(data["spp"])), float(data["seconds"])
+
+
+def stored_or_rendered(path: Path, scene, render: Callable[[], object], **params) -> tuple[object, dict]:
+    """The reference stored at ``path`` when its fingerprint matches (scene + ``params``), otherwise
+    ``render()``'s, stored there. Returns the image and {"stored": bool, "seconds": compute time,
+    "fingerprint": digest, "file": path}."""
+    digest, description = fingerprint(scene, **params)
+    found = load(path, digest)
+    if found is not None:
+        image, seconds = found
+        return image, {"stored": True, "seconds": seconds, "fingerprint": digest, "file": str(path)}
+    print(f"computing the reference stored as {path} (fingerprint {digest}); this is slow, it is kept for next time")
+    start = time.perf_counter()
+    image = render()
+    seconds = time.perf_counter() - start
+    save(path, image, digest, description, seconds)
+    return image, {"stored": False, "seconds": seconds, "fingerprint": digest, "file": str(path)}
