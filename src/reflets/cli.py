@@ -81,13 +81,14 @@ def cmd_reference(args) -> int:
         pixel=args.pixel,
         heuristic=args.mis,
         progress=not args.quiet,
+        workers=args.workers,
     )
     write_image(out, result.image)
-    if result.engine == "numpy":
+    if result.engine != "mitsuba":
         write_image(stderr_path, result.stderr)
     print(
         f"wrote {out}"
-        + (f" and {stderr_path}" if result.engine == "numpy" else "")
+        + (f" and {stderr_path}" if result.engine != "mitsuba" else "")
         + f" ({result.spp} spp, {result.seconds:.1f} s, {result.samples_per_second / 1e6:.2f} M samples/s)"
     )
     return 0
@@ -280,7 +281,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="output image (.exr or .npy); the standard error goes to NAME.stderr.exr")
     p.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--engine", choices=["numpy", "mitsuba"], default="numpy")
+    p.add_argument(
+        "--engine",
+        choices=["numpy", "mitsuba", "volumetric"],
+        default="numpy",
+        help="numpy (direct lighting, default), mitsuba, or volumetric (translucent media, all scattering orders)",
+    )
+    p.add_argument("--workers", type=int, default=1, help="processes sharing the samples (volumetric engine)")
     p.add_argument("--visibility", choices=["on", "off"], default="on", help="shadows (default on)")
     p.add_argument(
         "--pixel",

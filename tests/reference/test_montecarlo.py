@@ -115,7 +115,7 @@ def test_bad_arguments_are_clear_errors(minimal_scene):
     scene = reflets.load_dict(small(minimal_scene, (8, 8)))
     with pytest.raises(ArgumentError, match="spp"):
         reference(scene, spp=0, progress=False)
-    with pytest.raises(ArgumentError, match="engine.*numpy, mitsuba"):
+    with pytest.raises(ArgumentError, match="engine.*numpy, mitsuba, volumetric"):
         reference(scene, engine="pbrt", progress=False)
     with pytest.raises(ArgumentError, match="pixel"):
         reference(scene, pixel="gauss", progress=False)

@@ -173,3 +173,29 @@ def test_manifold_connection_finds_the_refracted_light_paths_a_brute_force_searc
         reachable[i] = np.any((s > 0) & (s < chord) & (miss < 0.003))
     assert 0.3 < reachable.mean() < 0.9  # the critical-angle shadow exists
     assert valid[reachable].mean() > 0.9
+
+
+def test_cli_reference_volumetric_engine(tmp_path, capsys):
+    """``reflets reference --engine volumetric``: the image and its standard error, the same as the Python call;
+    what it cannot do is a one-line error with exit code 2."""
+    from reflets.cli import main
+    from reflets.imageio import read_image
+
+    scene_file = tmp_path / "sphere.toml"
+    scene_file.write_text(
+        "[camera]\nposition = [0, 0.5, 3]\nlook_at = [0, 0, 0]\nfov_y = 35\nsize = [16, 12]\n"
+        '[materials.skin]\ntype = "translucent"\npreset = "skin1"\neta = 1.0\nmm_per_unit = 25.0\n'
+        '[[mesh]]\nshape = "sphere"\nradius = 1.0\nmaterial = "skin"\n'
+        '[[light]]\ntype = "point"\nposition = [2, 3, 2]\nintensity = [20, 20, 20]\n'
+    )
+    out = tmp_path / "ref.exr"
+    args = ["reference", str(scene_file), "-o", str(out), "--engine", "volumetric", "--spp", "2", "-q"]
+    assert main([*args, "--workers", "2"]) == 0 and "samples/s" in capsys.readouterr().out
+    image, stderr = read_image(out), read_image(tmp_path / "ref.stderr.exr")
+    expected = render_volumetric(reflets.load_scene(scene_file), spp=2, seed=0, workers=2, progress=False)
+    np.testing.assert_allclose(image, expected.image, rtol=1e-6)
+    assert stderr.shape == (12, 16, 3) and np.all(stderr[expected.mask] >= 0)
+    assert main([*args, "--visibility", "off"]) == 2
+    assert main([*args, "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "pixel centres with shadows" in err and "workers must be at least 1" in err and "Traceback" not in err

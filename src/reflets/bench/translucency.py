@@ -24,6 +24,7 @@ technique's cost on the document's Fig 7.2 settings.
 
 from __future__ import annotations
 
+import os
 import statistics
 from pathlib import Path
 
@@ -116,8 +117,6 @@ def bunny_reference(size, spp: int, out_dir: Path, *, eta: float = 1.3, seed: in
     """Volumetric path tracing of the Fig 7.2 bunny (skin1, 100 mm) in all the machine's cores, stored under
     ``out_dir/references/`` and used again while the scene, ``spp`` and ``seed`` match (reflets.reference.store):
     at the document's 1024×768 it takes about half an hour of two cores. Returns (image, stored-file info)."""
-    import os
-
     from ..reference.store import stored_or_rendered
     from ..reference.volumetric import render_volumetric
 
@@ -159,6 +158,8 @@ def _costs(scene, size, frames: int, settings) -> list[dict]:
             {"terms": ["multiple"], "curvature_rejection": 0.5},
         )
     )
+    per_channel = {"terms": ["multiple"], "ring_sets": "per_channel"}
+    cases.append(("multiple, default + per-channel rings", "translucent", per_channel))
     cases.append(("multiple, default", "translucent", {"terms": ["multiple"]}))
     techniques = {}
     for label, method, params in cases:
@@ -186,47 +187,53 @@ def _relmse(image, ref, m) -> float:
     return float(np.mean((image[m] - ref[m]) ** 2) / np.mean(ref[m] ** 2))
 
 
+def _error_row(scene, size, frames: int, ref, noise: float, params: dict) -> tuple[np.ndarray, dict]:
+    """One ``translucent`` image of ``scene`` against the volumetric reference ``ref`` (its relative noise
+    ``noise``), and the median time of ``frames`` more frames."""
+    from ..gpu import get_context
+    from ..metrics import flip
+    from ..techniques import get_technique
+
+    technique = get_technique("translucent")(get_context(), **params)
+    technique.prepare(scene)
+    image = technique.render(size=size)
+    technique.timer.wall_ms.clear()
+    technique.timer.gpu_ms.clear()
+    for _ in range(frames):
+        technique.render(size=size)
+    ms = statistics.median(technique.timer.gpu_ms or technique.timer.wall_ms)
+    technique.release()
+    m = ref.mask
+    relmse = _relmse(image, ref.image, m)
+    return image, {
+        "samples": params.get("rings", 12) * params.get("angles", 14),
+        "frame_ms": ms,
+        "relmse": relmse,
+        "relmse_less_noise": relmse - noise,
+        "mean_ratio": (image[m].mean(axis=0) / ref.image[m].mean(axis=0)).tolist(),
+        "flip": flip(image, ref.image),
+    }
+
+
 def _bunny_errors(size, spp: int, settings, out_dir: Path, frames: int) -> dict:
     """Error against volumetric path tracing, and frame time, of every profile at every Fig 7.2 setting on the
     index-matched bunny (η = 1: the reference's cheaper walk, straight shadow rays; η = 1.3 in _bunny_document)."""
 
-    from ..gpu import get_context
     from ..imageio import write_image
-    from ..metrics import flip
-    from ..reference.volumetric import render_volumetric
-    from ..techniques import get_technique
 
-    ref = render_volumetric(_object_scene("bunny.ply", "skin1", 100.0, size, eta=1.0), spp=spp, seed=7)
+    ref, _ = bunny_reference(size, spp, out_dir, eta=1.0, seed=7)
     m = ref.mask
     noise = float(np.mean(ref.stderr[m] ** 2) / np.mean(ref.image[m] ** 2))
     write_image(out_dir / "translucency_bunny_reference.png", ref.image)
-    ctx = get_context()
     rows = []
     for profile in ("dipole", "better_dipole", "normalized_diffusion"):
         scene = _object_scene("bunny.ply", "skin1", 100.0, size, eta=1.0, profile=profile)
-        for label, rings, angles, radius in [("default", 12, 14, None), *settings]:
-            technique = get_technique("translucent")(ctx, rings=rings, angles=angles, radius_mfp=radius)
-            technique.prepare(scene)
-            image = technique.render(size=size)
-            technique.timer.wall_ms.clear()
-            technique.timer.gpu_ms.clear()
-            for _ in range(frames):
-                technique.render(size=size)
-            ms = statistics.median(technique.timer.gpu_ms or technique.timer.wall_ms)
-            technique.release()
-            if label == "default":
+        for label, rings, angles, radius in [("default (168, capture radius)", 12, 14, None), *settings]:
+            params = {"rings": rings, "angles": angles, "radius_mfp": radius}
+            image, row = _error_row(scene, size, frames, ref, noise, params)
+            rows.append({"profile": profile, "setting": label, **row})
+            if radius is None:
                 write_image(out_dir / f"translucency_bunny_{profile}.png", image)
-            rows.append(
-                {
-                    "profile": profile,
-                    "setting": label if radius is not None else "default (168, capture radius)",
-                    "samples": rings * angles,
-                    "frame_ms": ms,
-                    "relmse": _relmse(image, ref.image, m),
-                    "mean_ratio": (image[m].mean(axis=0) / ref.image[m].mean(axis=0)).tolist(),
-                    "flip": flip(image, ref.image),
-                }
-            )
     plot_error_time(rows, out_dir / "translucency_error_time_eta1.png", noise)
     curvature = _curvature_rows(ref, size)
     return {"size": list(size), "spp": spp, "reference_noise_relmse": noise, "rows": rows, "curvature": curvature}
@@ -255,7 +262,7 @@ def _curvature_rows(bunny_ref, size) -> list[dict]:
                 "light": [{"type": "point", "position": [2, 3, 2], "intensity": [20, 20, 20]}],
             }
         )
-        ref = render_volumetric(scene, spp=64, seed=1, progress=False)
+        ref = render_volumetric(scene, spp=64, seed=1, progress=False, workers=os.cpu_count() or 1)
         cases.append((f"sphere r = {radius_mm:g} mm, better_dipole", scene, ref))
     rows = []
     for label, scene, ref in cases:
@@ -288,10 +295,7 @@ def _bunny_document(size, spp: int, settings, out_dir: Path, frames: int) -> dic
     volumetric path tracing through the refracting boundary (stored reference, :func:`bunny_reference`), single
     + multiple scattering (the reference leaves the interface's own reflection out), per profile and sampling
     setting, then the options on the better dipole."""
-    from ..gpu import get_context
     from ..imageio import write_image
-    from ..metrics import flip
-    from ..techniques import get_technique
 
     ref, stored = bunny_reference(size, spp, out_dir)
     m = ref.mask
@@ -303,34 +307,13 @@ def _bunny_document(size, spp: int, settings, out_dir: Path, frames: int) -> dic
         for label, rings, angles, radius in [("default (168, capture radius)", 12, 14, None), *settings]
     ]
     cases += [("better_dipole", label, params) for label, params in DOCUMENT_OPTIONS]
-    ctx = get_context()
     rows = []
     for profile, label, params in cases:
         scene = _object_scene("bunny.ply", "skin1", 100.0, size, eta=1.3, profile=profile)
-        technique = get_technique("translucent")(ctx, terms=("single", "multiple"), **params)
-        technique.prepare(scene)
-        image = technique.render(size=size)
-        technique.timer.wall_ms.clear()
-        technique.timer.gpu_ms.clear()
-        for _ in range(frames):
-            technique.render(size=size)
-        ms = statistics.median(technique.timer.gpu_ms or technique.timer.wall_ms)
-        technique.release()
+        image, row = _error_row(scene, size, frames, ref, noise, {"terms": ("single", "multiple"), **params})
+        rows.append({"profile": profile, "setting": label, **row})
         if label.startswith("default (") and profile == "better_dipole":
             write_image(out_dir / "translucency_bunny_eta13_better_dipole.png", image)
-        relmse = _relmse(image, ref.image, m)
-        rows.append(
-            {
-                "profile": profile,
-                "setting": label,
-                "samples": params.get("rings", 12) * params.get("angles", 14),
-                "frame_ms": ms,
-                "relmse": relmse,
-                "relmse_less_noise": relmse - noise,
-                "mean_ratio": (image[m].mean(axis=0) / ref.image[m].mean(axis=0)).tolist(),
-                "flip": flip(image, ref.image),
-            }
-        )
     plot_error_time(
         [r for r in rows if r["setting"] not in dict(DOCUMENT_OPTIONS)], out_dir / "translucency_error_time.png", noise
     )
@@ -466,16 +449,11 @@ def _markdown(r: dict) -> str:
         "subtracts it (an unbiased estimate of the error against the converged image). The interface's reflection "
         "is left out on both sides. Frame time at the same size.",
         "",
-        "| profile | setting | samples | ms / frame | relative MSE | less noise | mean ratio R, G, B | FLIP |",
-        "|---|---|---|---|---|---|---|---|",
+        *_error_table(d["rows"]),
+        "",
+        "![error vs time](translucency_error_time.png)",
+        "",
     ]
-    for row in d["rows"]:
-        ratio = ", ".join(f"{v:.3f}" for v in row["mean_ratio"])
-        lines.append(
-            f"| {row['profile']} | {row['setting']} | {row['samples']} | {row['frame_ms']:.0f} | "
-            f"{row['relmse']:.2%} | {row['relmse_less_noise']:.2%} | {ratio} | {row['flip']:.3f} |"
-        )
-    lines += ["", "![error vs time](translucency_error_time.png)", ""]
     lines += [
         "![reference](translucency_bunny_eta13_reference.png) "
         "![better dipole](translucency_bunny_eta13_better_dipole.png)"
@@ -486,17 +464,11 @@ def _markdown(r: dict) -> str:
         f"## Error vs time: bunny at 100 mm, skin1, index-matched (η = 1), {e['size'][0]}×{e['size'][1]}",
         "",
         f"Against volumetric path tracing ({e['spp']} spp; its own noise: relative MSE "
-        f"{e['reference_noise_relmse']:.2%}, included in every error below). Frame time at the same size.",
+        f"{e['reference_noise_relmse']:.2%}, included in every relative MSE, subtracted in the next column). "
+        "Frame time at the same size.",
         "",
-        "| profile | setting | samples | ms / frame | relative MSE | mean ratio R, G, B | FLIP |",
-        "|---|---|---|---|---|---|---|",
+        *_error_table(e["rows"]),
     ]
-    for row in e["rows"]:
-        ratio = ", ".join(f"{v:.3f}" for v in row["mean_ratio"])
-        lines.append(
-            f"| {row['profile']} | {row['setting']} | {row['samples']} | {row['frame_ms']:.0f} | "
-            f"{row['relmse']:.2%} | {ratio} | {row['flip']:.3f} |"
-        )
     lines += [
         "",
         "## Curvature rejection (κ_max per mm; none = off)",
@@ -523,6 +495,20 @@ def _markdown(r: dict) -> str:
         "",
     ]
     return "\n".join(lines)
+
+
+def _error_table(rows: list[dict]) -> list[str]:
+    lines = [
+        "| profile | setting | samples | ms / frame | relative MSE | less noise | mean ratio R, G, B | FLIP |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for row in rows:
+        ratio = ", ".join(f"{v:.3f}" for v in row["mean_ratio"])
+        lines.append(
+            f"| {row['profile']} | {row['setting']} | {row['samples']} | {row['frame_ms']:.0f} | "
+            f"{row['relmse']:.2%} | {row['relmse_less_noise']:.2%} | {ratio} | {row['flip']:.3f} |"
+        )
+    return lines
 
 
 def _pct(x) -> str:

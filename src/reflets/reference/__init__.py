@@ -3,6 +3,7 @@
 >>> result = reflets.reference(scene, spp=256)            # NumPy, float64, MIS, per-pixel standard error
 >>> result.image, result.stderr
 >>> result = reflets.reference(scene, spp=256, engine="mitsuba")
+>>> result = reflets.reference(translucent_scene, spp=32, engine="volumetric", workers=2)  # all orders of scattering
 """
 
 from __future__ import annotations
@@ -15,27 +16,32 @@ from ..errors import ArgumentError
 from ..scene import Scene
 from .montecarlo import MonteCarloReference, ReferenceResult
 
-ENGINES = ("numpy", "mitsuba")
+ENGINES = ("numpy", "mitsuba", "volumetric")
 
 
 def reference(
     scene: Scene | str | Path | dict,
     spp: int = 64,
     seed: int = 0,
-    engine: Literal["numpy", "mitsuba"] = "numpy",
+    engine: Literal["numpy", "mitsuba", "volumetric"] = "numpy",
     visibility: bool = True,
     size: tuple[int, int] | None = None,
     pixel: Literal["center", "box"] = "center",
     heuristic: Literal["power", "balance"] = "power",
     progress: bool = True,
+    workers: int = 1,
 ) -> ReferenceResult:
-    """Render a ground-truth image of ``scene`` (direct lighting only, like every reflets technique).
+    """Render a ground-truth image of ``scene`` (direct lighting only, like every reflets technique; the
+    volumetric engine: all orders of scattering inside a translucent medium).
 
     Parameters
     ----------
     spp : samples per pixel; seed : random seed (same seed, same image)
     engine : "numpy" (ours) or "mitsuba" (Mitsuba 3 ``scalar_rgb`` with its ``direct`` integrator; always
-        with shadows and box pixel filtering; needs the ``reference`` extra)
+        with shadows and box pixel filtering; needs the ``reference`` extra) or "volumetric" (path tracing of a
+        translucent medium inside its smooth boundary, one point or directional light: the ``translucent``
+        technique's single + multiple scattering, reflets.reference.volumetric; pixel centres, with shadows)
+    workers : processes sharing the samples (volumetric engine)
     visibility : shadows on (ray-cast occlusion) or off (the area-light document's unoccluded setting)
     pixel : "center" samples the pixel centre like the GPU renderer; "box" averages over the pixel
     heuristic : MIS weights, "power" (β = 2) or "balance"
@@ -44,6 +50,8 @@ def reference(
 
     scene = as_scene(scene)
     size = check_size(size)
+    if workers < 1:
+        raise ArgumentError(f"workers must be at least 1 (got {workers})", field="workers")
     if engine == "numpy":
         return MonteCarloReference(scene, visibility=visibility, heuristic=heuristic).render(
             spp, seed=seed, size=size, pixel=pixel, progress=progress
@@ -66,6 +74,17 @@ def reference(
             seconds=time.perf_counter() - start,
             engine="mitsuba",
         )
+    if engine == "volumetric":
+        from .volumetric import render_volumetric
+
+        if not visibility or pixel != "center":
+            raise ArgumentError(
+                "the volumetric engine samples pixel centres with shadows (visibility on, pixel center)",
+                field="engine",
+            )
+        start = time.perf_counter()
+        result = render_volumetric(scene, spp=spp, seed=seed, size=size, progress=progress, workers=workers)
+        return ReferenceResult(result.image, result.stderr, spp, time.perf_counter() - start, engine="volumetric")
     raise ArgumentError(f"unknown engine '{engine}'; allowed: {', '.join(ENGINES)}", field="engine")
 
 

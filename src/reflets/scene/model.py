@@ -353,7 +353,7 @@ class Scene(Strict):
                 raise ValueError(f"mesh[{i}].material: unknown material '{m.material}'; defined materials: {known}")
             if m.reflector and self.materials[m.material].type != "mirror":
                 raise ValueError(
-                    f"mesh[{i}].reflector: a reflector needs a material of type \"mirror\", "
+                    f'mesh[{i}].reflector: a reflector needs a material of type "mirror", '
                     f"'{m.material}' is \"{self.materials[m.material].type}\""
                 )
         envs = [light for light in self.light if isinstance(light, EnvironmentLight)]
