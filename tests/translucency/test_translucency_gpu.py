@@ -52,6 +52,21 @@ def test_multiple_scattering_under_oblique_light_keeps_the_slab_energy(profile):
     np.testing.assert_allclose(image[14:18, 14:18].mean(axis=(0, 1)), expected, rtol=0.03)
 
 
+def test_a_profile_vanishing_at_wide_rings_stays_finite():
+    """The document's widest setting (1200 samples, 30 mean free paths of the widest channel) with normalised
+    diffusion: skin1's blue profile underflows at the outer rings; the image stays finite and keeps the slab's
+    energy (a 1/R_d of zero once made 0 × inf = NaN on the GPU)."""
+    scene = slab({"preset": "skin1", "profile": "normalized_diffusion"}, OVERHEAD)
+    image = reflets.render(scene, method="translucent", terms=["multiple"], rings=40, angles=30, radius_mfp=30.0)
+    assert np.all(np.isfinite(image))
+    material = scene.materials["m"]
+    c = 1 - 2 * fresnel_moment(1, material.eta, inside=False)
+    expected = fresnel_transmittance(1.0, material.eta) ** 2 * total_reflectance(
+        "normalized_diffusion", material.medium()
+    )
+    np.testing.assert_allclose(image[14:18, 14:18].mean(axis=(0, 1)), expected / (np.pi * c), rtol=0.03)
+
+
 @pytest.mark.parametrize("quadrature", ["product", "bilinear"])
 def test_per_channel_ring_sets_keep_the_slab_energy_and_fit_each_channel(quadrature):
     """The document's β per channel: each channel integrated with its own rings (its own radius and β) keeps the

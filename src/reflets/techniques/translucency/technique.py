@@ -333,7 +333,10 @@ class Translucency(Forward):
                     return profile_rd(material.profile, np.asarray(r)[..., None], medium)
 
                 weights.append(rings_module.product_weights(radii, p.angles, rd, first_cell=False))
-                inv_rd.append(1.0 / rd(np.maximum(radii, 1e-9)))
+                # a channel whose profile has vanished at a ring (a wide radius for a strongly absorbed
+                # channel) contributes nothing there: 0, not 1/0 (inf × 0 is NaN on the GPU)
+                value = rd(np.maximum(radii, 1e-9))
+                inv_rd.append(np.divide(1.0, value, out=np.zeros_like(value), where=value > 1e-30))
         return {
             "a_ring_weight": np.concatenate(weights).astype(np.float32).tobytes(),
             "a_ring_inv_rd": np.concatenate(inv_rd).astype(np.float32).tobytes(),
