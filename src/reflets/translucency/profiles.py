@@ -162,7 +162,3 @@ def capture_radii(profile: str, medium: Medium, fraction: float = 0.99) -> np.nd
     cumulative /= cumulative[-1]
     return np.array([np.interp(fraction, cumulative[:, c], r) for c in range(f.shape[1])])
 
-
-def capture_radius(profile: str, medium: Medium, fraction: float = 0.99) -> float:
-    """The widest channel's :func:`capture_radii`: one radius that serves the three channels."""
-    return float(np.max(capture_radii(profile, medium, fraction)))

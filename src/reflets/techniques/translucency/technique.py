@@ -322,16 +322,16 @@ class Translucency(Forward):
         """Per ring set (rows of ``radii_mm``), the node weights of the chosen quadrature (and 1/R_d at the ring
         radii for the product rule), stacked set after set."""
         p = self.params
+
+        def rd(r):
+            return profile_rd(material.profile, np.asarray(r)[..., None], medium)
+
         weights, inv_rd = [], []
         for radii in radii_mm:
             if p.ms_quadrature == "bilinear":
                 weights.append(np.repeat(rings_module.ring_weights(radii, p.angles)[:, None], 3, axis=1))
                 inv_rd.append(np.ones_like(weights[-1]))
             else:
-
-                def rd(r):
-                    return profile_rd(material.profile, np.asarray(r)[..., None], medium)
-
                 weights.append(rings_module.product_weights(radii, p.angles, rd, first_cell=False))
                 # a channel whose profile has vanished at a ring (a wide radius for a strongly absorbed
                 # channel) contributes nothing there: 0, not 1/0 (inf × 0 is NaN on the GPU)

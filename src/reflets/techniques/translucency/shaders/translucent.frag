@@ -289,8 +289,9 @@ bool spoke_continues(vec3 x_prev, vec3 n_prev, vec3 xs, vec3 ns) {
 const float GAUSS3_T[3] = float[3](0.1127016654, 0.5, 0.8872983346);  // Gauss-Legendre on [0, 1]
 const float GAUSS3_W[3] = float[3](0.2777777778, 0.4444444444, 0.2777777778);
 
-// The profile integrated around x over the light view (view 0) or the camera view (view 1) with ring set
-// `ring_set`, spoke by spoke (one direction at a time, centre outwards, so that curvature rejection can cut a spoke).
+// The profile integrated around x (normal n) over the light view (view 0) or the camera view (view 1) with
+// ring set `ring_set`, spoke by spoke (one direction at a time, centre outwards, so that curvature rejection
+// can cut a spoke).
 vec3 profile_integral(int view, vec3 x, vec3 n, vec3 wo, int ring_set) {
     int k0 = ring_set * (RINGS + 1);
     vec3 axis = view == 0 ? to_light(x) : wo;
