@@ -219,7 +219,6 @@ def render_volumetric(
     ``workers > 1`` splits the samples over that many processes (a reference at the document's 1024×768 takes
     an hour of one core): each block of samples draws from its own child of ``seed``'s SeedSequence
     (reproducible for a given ``seed``, ``spp`` and ``workers``)."""
-    _check_volumetric_scene(scene)
     if size is not None:
         scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"size": tuple(size)})})
     job = _VolumetricJob(scene, refract, orders)
