@@ -9,6 +9,7 @@ Monte Carlo noise), with the fingerprint's inputs written out so that a reader c
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import time
 from collections.abc import Callable
@@ -49,8 +50,6 @@ def save(path: Path, image, digest: str, description: dict, seconds: float) -> N
         "description": np.array(json.dumps(description)),
         "seconds": np.array(seconds),
     }
-    import io
-
     buffer = io.BytesIO()
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(buffer, **payload)

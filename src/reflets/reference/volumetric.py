@@ -224,7 +224,7 @@ def render_volumetric(
     job = _VolumetricJob(scene, refract, orders)
     if workers > 1:
         # samples per task: what one batch holds, and at least four tasks per worker
-        block = max(1, min(300_000 // max(3 * len(job.pix), 1), -(-spp // (4 * workers))))
+        block = max(1, min(_samples_per_batch(len(job.pix)), -(-spp // (4 * workers))))
         total, total2 = _sums_in_processes(scene, refract, orders, spp, block, seed, workers, progress)
     else:
         with Progress(disable=not progress, transient=True) as bar:
@@ -578,13 +578,19 @@ def _hit_points(geometry, prim, u, v, d) -> _HitPoints:
     return _HitPoints(np.sum(w * p, axis=-2), n * flip, ng * flip)
 
 
+def _samples_per_batch(pixels: int) -> int:
+    """Samples of every pixel and channel walked as one array (about 300,000 paths: long enough for the tail of
+    the walks to run vectorised, small enough for memory)."""
+    return max(1, 300_000 // max(3 * pixels, 1))
+
+
 def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng, orders, advance):
     """All samples and channels of the refracting walk as one batch (chunked): per-path coefficients, so that
     the long tail of the walks runs on large arrays. Returns per-pixel Σ and Σ² of the samples (P, 3)."""
     n = len(pix)
     total = np.zeros((n, 3))
     total2 = np.zeros((n, 3))
-    per_chunk = max(1, 300_000 // max(3 * n, 1))
+    per_chunk = _samples_per_batch(n)
     done = 0
     while done < spp:
         k = min(per_chunk, spp - done)

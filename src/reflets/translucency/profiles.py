@@ -161,4 +161,3 @@ def capture_radii(profile: str, medium: Medium, fraction: float = 0.99) -> np.nd
     )
     cumulative /= cumulative[-1]
     return np.array([np.interp(fraction, cumulative[:, c], r) for c in range(f.shape[1])])
-
