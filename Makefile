@@ -27,6 +27,7 @@ test: $(VENV)/.installed-test
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check src tests
+	$(BIN)/lint-imports --no-cache
 
 clean:
 	rm -rf $(VENV) out build *.egg-info src/*.egg-info

@@ -108,9 +108,9 @@ def test_quad_area_light_converges_to_dense_quadrature(ctx, minimal_scene):
         }
     ]
     scene = reflets.load_dict(minimal_scene)
-    ref = reflets.render(scene, area_samples=64)
+    ref = reflets.render(scene, method="forward", area_samples=64)
     _, mask = analytic_image(reflets.load_dict({**minimal_scene, "light": []}))
-    errors = [np.max(np.abs(reflets.render(scene, area_samples=n) - ref)[mask]) for n in (4, 8)]
+    errors = [np.max(np.abs(reflets.render(scene, method="forward", area_samples=n) - ref)[mask]) for n in (4, 8)]
     assert errors[1] < errors[0] / 3, errors
 
 
@@ -121,7 +121,7 @@ def test_one_sided_quad_light_lights_only_its_front(ctx, minimal_scene):
         "corners": [[-0.5, 1, -0.5], [0.5, 1, -0.5], [-0.5, 1, 0.5]],
         "radiance": [5, 5, 5],
     }
-    floor = lambda light: reflets.render(reflets.load_dict({**minimal_scene, "light": [light]}))[200]  # noqa: E731
+    floor = lambda light: reflets.render(reflets.load_dict({**minimal_scene, "light": [light]}), method="forward")[200]  # noqa: E731
     assert np.all(floor(up) == 0)
     assert floor(down).max() > 0.05
     assert np.allclose(floor({**up, "two_sided": True}), floor(down), rtol=1e-5, atol=1e-7)

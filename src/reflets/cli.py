@@ -24,7 +24,7 @@ def _size(text: str) -> tuple[int, int]:
     m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", text)
     if not m:
         raise ArgumentError(f"'{text}' is not WIDTHxHEIGHT (e.g. 640x480)", field="--size")
-    from .api import check_size
+    from .arguments import check_size
 
     try:
         return check_size((int(m.group(1)), int(m.group(2))))
@@ -49,7 +49,8 @@ def _params(items: list[str]) -> dict[str, object]:
 
 
 def cmd_render(args) -> int:
-    from .api import as_scene, render
+    from .api import render
+    from .arguments import as_scene
     from .imageio import IMAGE_WRITE_EXTENSIONS, check_output_path, write_image
 
     out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".exr")
@@ -63,7 +64,7 @@ def cmd_render(args) -> int:
 
 
 def cmd_reference(args) -> int:
-    from .api import as_scene
+    from .arguments import as_scene
     from .imageio import check_output_path, write_image
     from .reference import reference
 
@@ -152,7 +153,10 @@ def cmd_info(args) -> int:
             versions[name] = metadata.version(name)
         except metadata.PackageNotFoundError:
             versions[name] = None
+    from .renderer.compose import evaluation_table
+
     info = {"packages": versions, "methods": sorted(TECHNIQUES)}
+    info["auto"] = [{"material": m, "light": light, "evaluation": how} for m, light, how in evaluation_table()]
     status = 0
     try:
         from .gpu import gl_info
@@ -170,6 +174,9 @@ def cmd_info(args) -> int:
         else:
             print(f"OpenGL    {gl['version']} — {gl['renderer']} ({gl['vendor']}), REFLETS_GL={gl['driver_choice']}")
         print("methods   " + ", ".join(info["methods"]))
+        print("auto      how the default method evaluates each material under each light:")
+        for row in info["auto"]:
+            print(f"          {row['material']:<17}{row['light']:<12}{row['evaluation']}")
         for name, version in versions.items():
             print(f"{name:<24}{version or '-'}")
     return status
@@ -366,9 +373,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warnings() -> None:
+    """reflets' warnings as one line on stderr, like its errors (no source line under them)."""
+    import warnings
+
+    from .diagnostics import RefletsWarning
+
+    default = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, RefletsWarning):
+            print(f"reflets: warning: {message}", file=sys.stderr)
+        else:
+            default(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = show
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    _one_line_warnings()
     try:
         return args.func(args)
     except RefletsError as exc:

@@ -67,6 +67,7 @@ AREA_METHODS = (
 
 #: later techniques add their scenes here
 DEMO: list[DemoEntry] = [
+    DemoEntry("60_showcase.toml", (Method("auto", spp=32),)),
     DemoEntry("01_plane_point.toml"),
     DemoEntry("02_sphere_directional.toml"),
     DemoEntry("03_shapes.toml"),

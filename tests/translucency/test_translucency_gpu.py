@@ -140,7 +140,10 @@ def test_product_weights_integrate_the_profile():
     [
         ([], "exactly one point or directional light"),
         ([OVERHEAD, OVERHEAD], "exactly one point or directional light"),
-        ([{"type": "point", "position": [0, 0.1, 0], "intensity": [1, 1, 1]}], "outside the scene's bounding sphere"),
+        (
+            [{"type": "point", "position": [0, 0.1, 0], "intensity": [1, 1, 1]}],
+            "outside the translucent meshes' bounding sphere",
+        ),
     ],
 )
 def test_unsupported_lighting_is_a_clear_error(lights, message):

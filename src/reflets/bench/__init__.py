@@ -42,7 +42,7 @@ def machine() -> dict:
 
 
 def run_suite(name: str, out_dir: Path, quick: bool = False) -> dict:
-    from . import arealights, reference, reflections, scratches, translucency  # noqa: F401  (register their suites)
+    from . import arealights, reference, reflections, renderer, scratches, translucency  # noqa: F401  (register)
 
     if name not in SUITES:
         raise ArgumentError(f"unknown suite '{name}'; allowed: {', '.join(sorted(SUITES))}", field="suite")

@@ -20,6 +20,11 @@ class HDRTarget:
         self.ctx.viewport = (0, 0, *self.size)
         self.fbo.clear(*clear, depth=1.0)
 
+    def bind(self) -> None:
+        """Draw into this target without clearing it (a composed frame's later passes)."""
+        self.fbo.use()
+        self.ctx.viewport = (0, 0, *self.size)
+
     def read(self, components: int = 3) -> np.ndarray:
         """Colour as float32 (H, W, components); OpenGL's bottom-up rows are flipped so row 0 is the top."""
         w, h = self.size

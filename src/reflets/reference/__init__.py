@@ -46,7 +46,7 @@ def reference(
     pixel : "center" samples the pixel centre like the GPU renderer; "box" averages over the pixel
     heuristic : MIS weights, "power" (β = 2) or "balance"
     """
-    from ..api import as_scene, check_size
+    from ..arguments import as_scene, check_size
 
     scene = as_scene(scene)
     size = check_size(size)

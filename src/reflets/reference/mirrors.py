@@ -21,8 +21,8 @@ import numpy as np
 
 from ..errors import SceneError
 from ..reflections.scene import reflector_surface
-from ..reflections.surfaces import _solve3
 from ..scene.model import BezierMesh, CylinderMesh, HeightFieldMesh, PlaneMesh, Scene, SphereMesh, TorusMesh
+from ..scene.surfaces import _solve3
 
 NEWTON_STEPS = 12
 #: the parametric refinement: largest (u, v) step (the mesh uv is within a cell of the answer), step halvings,

@@ -20,7 +20,7 @@ from reflets.reflections.solver import (
     sphere_reflection,
     third_point,
 )
-from reflets.reflections.surfaces import (
+from reflets.scene.surfaces import (
     BezierPatch,
     Chart,
     Cylinder,

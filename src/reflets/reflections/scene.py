@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene.model import BezierMesh, CylinderMesh, HeightFieldMesh, PlaneMesh, Scene, SphereMesh, TorusMesh
-from .surfaces import Chart, Cylinder, Plane, Sphere, Surface, Torus, _unit
+from ..scene.surfaces import Chart, Cylinder, Plane, Sphere, Surface, Torus, _unit
 
 
 class AffineChart(Chart):

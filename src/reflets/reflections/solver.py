@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from reflets.reflections.surfaces import Chart, IdentityChart, Sphere, Surface, _dot, _unit
+from reflets.scene.surfaces import Chart, IdentityChart, Sphere, Surface, _dot, _unit
 
 SQRT3_2 = 0.5 * math.sqrt(3.0)
 

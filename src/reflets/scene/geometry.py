@@ -2,15 +2,52 @@
 
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 
 from ..errors import SceneError
 from .meshdata import MeshData
 from .model import FileMesh, MeshBase, Scene
 
+#: world-space meshes kept for re-use (a persistent renderer prepares again after an edit: only the meshes
+#: whose description changed are built again); bounded, least recently used first out
+MESH_CACHE_ENTRIES = 64
+_MESH_CACHE: OrderedDict[tuple, MeshData] = OrderedDict()
+
 
 def mesh_data(scene: Scene, index: int) -> MeshData:
-    """World-space triangles of ``scene.mesh[index]`` (procedural shape or file, transform applied)."""
+    """World-space triangles of ``scene.mesh[index]`` (procedural shape or file, transform applied); the same
+    description (files by path, size and modification time) gives the same cached, read-only object."""
+    key = _mesh_key(scene, index)
+    if key is not None and key in _MESH_CACHE:
+        _MESH_CACHE.move_to_end(key)
+        return _MESH_CACHE[key]
+    data = _build_mesh_data(scene, index)
+    if key is not None:
+        for array in (data.positions, data.normals, data.tangents, data.uvs, data.indices):
+            array.flags.writeable = False
+        _MESH_CACHE[key] = data
+        while len(_MESH_CACHE) > MESH_CACHE_ENTRIES:
+            _MESH_CACHE.popitem(last=False)
+    return data
+
+
+def _mesh_key(scene: Scene, index: int) -> tuple | None:
+    mesh = scene.mesh[index]
+    files = []
+    for name in ("file",):
+        path = getattr(mesh, name, None)
+        if path is not None:
+            try:
+                stat = scene.resolve(path).stat()
+            except OSError:
+                return None  # let the build report the missing file
+            files.append((str(scene.resolve(path)), stat.st_size, stat.st_mtime_ns))
+    return (mesh.model_dump_json(exclude={"name", "material", "reflector"}), tuple(files))
+
+
+def _build_mesh_data(scene: Scene, index: int) -> MeshData:
     from .meshfile import load_mesh_file
     from .shapes import SHAPES
 
@@ -41,7 +78,15 @@ def clip_planes(eye: np.ndarray, points: np.ndarray) -> tuple[float, float]:
     """near/far enclosing every point: far beyond the farthest, near a fixed fraction of far."""
     if len(points) == 0:
         return 0.01, 100.0
-    centre, radius = bounding_sphere(points)
+    return clip_planes_of_sphere(eye, *bounding_sphere(points))
+
+
+def clip_planes_of_sphere(
+    eye: np.ndarray, centre: np.ndarray | None = None, radius: float = 0.0
+) -> tuple[float, float]:
+    """``clip_planes`` for points held by a known bounding sphere (None: an empty scene)."""
+    if centre is None:
+        return 0.01, 100.0
     far = (float(np.linalg.norm(centre - eye)) + radius) * 1.01 + 1e-6
     nearest = float(np.linalg.norm(centre - eye)) - radius
     near = max(far * 1e-5, min(nearest * 0.99, far * 1e-2)) if nearest > 0 else far * 1e-5

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import difflib
+import functools
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -22,8 +24,10 @@ def load_scene(path: str | Path) -> Scene:
         raise SceneError("file not found", file=path) from None
     except IsADirectoryError:
         raise SceneError("is a directory, expected a .toml scene file", file=path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError(f"cannot read ({exc.__class__.__name__}: {exc})", file=path) from None
+    except UnicodeDecodeError:
+        raise SceneError("not a text file (a scene is a UTF-8 TOML file)", file=path) from None
+    except OSError as exc:
+        raise SceneError(f"cannot read ({exc.strerror or exc.__class__.__name__})", file=path) from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -74,6 +78,34 @@ def _check_files(scene: Scene, source) -> None:
             )
 
 
+def did_you_mean(word: str, choices) -> str:
+    """`` (did you mean 'x'?)`` for the closest choice, or nothing."""
+    close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+@functools.cache
+def _field_names() -> frozenset[str]:
+    """Every key a scene file can hold, at any depth (for "did you mean")."""
+    names: set[str] = set()
+
+    def walk(node):
+        if isinstance(node, dict):
+            names.update(node.get("properties", {}))
+            for value in node.values():
+                walk(value)
+        elif isinstance(node, list):
+            for value in node:
+                walk(value)
+
+    from ..brdf import MATERIALS
+
+    walk(Scene.model_json_schema())
+    for material in MATERIALS.values():
+        walk(material.model_json_schema())
+    return frozenset(names)
+
+
 def _walk(loc: tuple, data: Any) -> tuple[str, Any]:
     """Follow a pydantic location through the user's input, dropping union tags:
     ``('mesh', 0, 'plane', 'size')`` → (``"mesh[0].size"``, the value the user wrote there, or None)."""
@@ -81,6 +113,8 @@ def _walk(loc: tuple, data: Any) -> tuple[str, Any]:
     node = data
     skipped = False
     for item in loc:
+        if isinstance(item, str) and ("-" in item or "[" in item):
+            continue  # a pydantic-internal union branch ("constrained-float", "function-after[…]"), not a key
         if isinstance(item, int):
             parts.append(f"[{item}]")
             node = node[item] if isinstance(node, list) and item < len(node) else None
@@ -114,7 +148,14 @@ def _first_error(exc: ValidationError, data: dict) -> str:
     loc, kind, msg = err["loc"], err["type"], err["msg"]
     field = _field_path(loc, data)
     if kind == "extra_forbidden":
-        return f"{field}: unknown key; check the spelling against `reflets schema`"
+        key = str(loc[-1])
+        return f"{field}: unknown key{did_you_mean(key, _field_names())}; check the spelling against `reflets schema`"
+    if kind == "mesh_kind":
+        from .model import SHAPE_MODELS
+
+        shape = err.get("input", {}).get("shape") if isinstance(err.get("input"), dict) else None
+        hint = did_you_mean(str(shape), SHAPE_MODELS) if shape is not None else ""
+        return f"{field}: unknown or missing shape{hint}; allowed: {msg.split('allowed: ', 1)[-1]}"
     if kind == "missing" and loc and isinstance(loc[-1], int):
         vector, got = _walk(loc[:-1], data)
         count = len(got) if isinstance(got, list) else "?"
@@ -128,7 +169,9 @@ def _first_error(exc: ValidationError, data: dict) -> str:
         return f"{field}: must be a finite number (got {err.get('input')!r})"
     if kind in ("union_tag_invalid", "union_tag_not_found"):
         ctx = err.get("ctx", {})
-        return f"{field}: unknown type {ctx.get('tag', '')!r}; allowed: {ctx.get('expected_tags', '')}"
+        tags = [t.strip().strip("'") for t in str(ctx.get("expected_tags", "")).split(",")]
+        tag = str(ctx.get("tag", ""))
+        return f"{field}: unknown type {tag!r}{did_you_mean(tag, tags)}; allowed: {ctx.get('expected_tags', '')}"
     if kind == "value_error":
         msg = msg.removeprefix("Value error, ")
         return msg if msg.startswith(("mesh[", "light", "background")) else f"{field}: {msg}"

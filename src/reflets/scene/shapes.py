@@ -23,8 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from reflets.errors import SceneError
-from reflets.reflections.surfaces import BezierPatch, HeightField
 from reflets.scene.meshdata import MeshData
+
+from .surfaces import BezierPatch, HeightField
 
 # 128 × 64 keeps adjacent vertex normals 2π/128 ≈ 2.8° apart: the chord sag is ≈ 3e-4 of the radius and the
 # silhouette stays smooth at 1080p for an object filling the frame, at ~8k vertices per object.
@@ -351,7 +352,7 @@ def bezier(control_points, segments: tuple[int, int] = (32, 32)) -> MeshData:
     ----------
     control_points : 4 × 4 × 3
         ``control_points[i][j]`` weighs the Bernstein polynomials ``B_i(u) B_j(v)``: the outer list runs
-        along u, the inner along v (:class:`reflets.reflections.surfaces.BezierPatch`).
+        along u, the inner along v (:class:`reflets.scene.surfaces.BezierPatch`).
     segments : (n_u, n_v)
         Grid cells (>= 1 each).
 
@@ -441,7 +442,7 @@ def heightfield(
         The same grid from a file (exactly one of heights and file).
     segments : (n_x, n_z) or None
         Grid cells; default one vertex per sample (n_x − 1, n_z − 1). Between samples the surface is the
-        Catmull–Rom bicubic interpolant (:class:`reflets.reflections.surfaces.HeightField`), so a finer mesh
+        Catmull–Rom bicubic interpolant (:class:`reflets.scene.surfaces.HeightField`), so a finer mesh
         follows the same surface.
 
     Notes

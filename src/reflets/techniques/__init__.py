@@ -3,13 +3,10 @@
 from . import arealights, forward, reflections, scratches, translucency  # noqa: F401  (registers every method)
 from .base import TECHNIQUES, Technique, TechniqueParams, get_technique, register_technique
 
-DEFAULT_METHOD = "forward"
-
 __all__ = [
     "TECHNIQUES",
     "Technique",
     "TechniqueParams",
     "get_technique",
     "register_technique",
-    "DEFAULT_METHOD",
 ]

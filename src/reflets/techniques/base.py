@@ -35,16 +35,41 @@ class Technique:
             self.params = self.Params(**params)
         except ValidationError as exc:
             err = exc.errors(include_url=False)[0]
-            field = ".".join(str(p) for p in err["loc"])
+            field = ".".join(str(p) for p in err["loc"] if not ("-" in str(p) or "[" in str(p)))
             allowed = ", ".join(self.Params.model_fields) or "none"
-            raise ArgumentError(f"{err['msg']} (parameters of '{self.name}': {allowed})", field=field) from None
+            hint = ""
+            if err["type"] == "extra_forbidden":
+                from ..scene.loaders import did_you_mean
+
+                hint = did_you_mean(str(err["loc"][-1]), self.Params.model_fields)
+            msg = err["msg"].removeprefix("Value error, ")
+            raise ArgumentError(f"{msg}{hint} (parameters of '{self.name}': {allowed})", field=field) from None
         self.scene: Scene | None = None
 
     def prepare(self, scene: Scene) -> None:
         raise NotImplementedError
 
+    #: does the image converge over frames (Monte Carlo)? A persistent renderer then accumulates frames across
+    #: calls while nothing changes
+    progressive: ClassVar[bool] = False
+
     def render(self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int | None = None) -> np.ndarray:
+        total, n_frames = self.accumulate(size=size, seed=seed, spp=spp)
+        return self.resolve(total, n_frames)
+
+    def accumulate(
+        self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int | None = None, first_frame: int = 0
+    ) -> tuple[np.ndarray, int]:
+        """The float64 sum of the frames of ``spp`` samples, frame indices from ``first_frame``, and their count."""
         raise NotImplementedError
+
+    def resolve(self, total: np.ndarray, n_frames: int) -> np.ndarray:
+        """The float32 image of an accumulated sum."""
+        return (total / n_frames).astype(np.float32)
+
+    def set_camera(self, camera) -> bool:
+        """Take a new camera without preparing again; False when the technique must prepare again."""
+        return False
 
     @property
     def default_spp(self) -> int:
@@ -65,5 +90,8 @@ def register_technique(cls: type[Technique]) -> type[Technique]:
 
 def get_technique(name: str) -> type[Technique]:
     if name not in TECHNIQUES:
-        raise ArgumentError(f"unknown method '{name}'; allowed: {', '.join(sorted(TECHNIQUES))}", field="method")
+        from ..scene.loaders import did_you_mean
+
+        hint = did_you_mean(str(name), TECHNIQUES)
+        raise ArgumentError(f"unknown method '{name}'{hint}; allowed: {', '.join(sorted(TECHNIQUES))}", field="method")
     return TECHNIQUES[name]

@@ -19,7 +19,8 @@ light, irradiance); area samples (point, dA), (light normal, two_sided), (radian
 from __future__ import annotations
 
 import math
-from typing import ClassVar, Literal
+from dataclasses import dataclass
+from typing import Annotated, ClassVar, Literal
 
 import moderngl
 import numpy as np
@@ -28,7 +29,7 @@ from pydantic import Field
 from ..errors import ArgumentError
 from ..gpu import FrameTimer, HDRTarget, ProgramSpec, get_program, set_uniforms
 from ..scene.environment import environment_grid, load_environment, rotation_y
-from ..scene.geometry import clip_planes, mesh_data
+from ..scene.geometry import bounding_sphere, clip_planes_of_sphere, mesh_data
 from ..scene.lightmask import load_masks, mask_lookup, quad_uv
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
@@ -49,6 +50,8 @@ EMITTER_PROGRAM = ProgramSpec(
 BACKGROUND_PROGRAM = ProgramSpec(
     "background", vertex=_SHADERS + "background.vert", fragment=_SHADERS + "background.frag"
 )
+#: one side of the environment grid (nu or nv): 1…1024 distant lights
+GridSide = Annotated[int, Field(ge=1, le=1024)]
 _OUTPUTS = {"radiance": 0, "position": 1, "normal": 2, "uv": 3}
 
 
@@ -56,7 +59,7 @@ class ForwardParams(TechniqueParams):
     """Parameters of the forward renderer."""
 
     area_samples: int = Field(8, ge=1, le=64, description="n: n×n midpoint samples per quad light")
-    env_grid: tuple[int, int] = Field((32, 16), description="environment map as nu × nv distant lights")
+    env_grid: tuple[GridSide, GridSide] = Field((32, 16), description="environment map as nu × nv distant lights")
     output: Literal["radiance", "position", "normal", "uv"] = "radiance"
 
 
@@ -105,6 +108,23 @@ def samples_per_pixel_side(spp: int) -> int:
     return s
 
 
+@dataclass(frozen=True)
+class PassRole:
+    """What a technique draws when a composed frame (``reflets.renderer.compose``) shares the target with
+    other techniques; the default is a whole frame."""
+
+    meshes: frozenset[int] | None = None  # meshes this technique shades (None: all)
+    clear: bool = True  # clear colour and depth first
+    extras: bool = True  # draw the emitters and the background after the meshes (and a technique's own passes)
+    additive: bool = False  # add onto surfaces already drawn (more lights on the same meshes): depth ≤, blend +
+
+    def shades(self, index: int) -> bool:
+        return self.meshes is None or index in self.meshes
+
+
+WHOLE_FRAME = PassRole()
+
+
 @register_technique
 class Forward(Technique):
     """Direct lighting by forward shading (the engine's baseline; see the module docstring)."""
@@ -112,6 +132,9 @@ class Forward(Technique):
     name: ClassVar[str] = "forward"
     summary: ClassVar[str] = "forward shading: point/directional exact, area lights by midpoint grid"
     Params: ClassVar[type[TechniqueParams]] = ForwardParams
+
+    #: the part of a frame this technique draws (a composed frame sets it before ``prepare``)
+    role: PassRole = WHOLE_FRAME
 
     def prepare(self, scene: Scene) -> None:
         ctx = self.ctx
@@ -158,6 +181,9 @@ class Forward(Technique):
         for index, mesh in enumerate(scene.mesh):
             data = mesh_data(scene, index)
             points.append(data.positions)
+            if not self.role.shades(index):
+                self._draws.append(None)  # another pass of a composed frame shades this mesh
+                continue
             material = scene.materials[mesh.material]
             spec = self.program_for(material)
             program = get_program(ctx, spec, slots=self.slots(material), **self.flags(material))
@@ -195,7 +221,8 @@ class Forward(Technique):
             self._objects.append(tex)
         cam = scene.camera
         all_points = np.concatenate(points) if points else np.zeros((0, 3))
-        self._near, self._far = clip_planes(np.asarray(cam.position, dtype=np.float64), all_points)
+        self._bounds = bounding_sphere(all_points) if len(all_points) else (None, 0.0)
+        self._near, self._far = clip_planes_of_sphere(np.asarray(cam.position, dtype=np.float64), *self._bounds)
         self.timer = FrameTimer(ctx)
 
     # ------------------------------------------------------------------ hooks for techniques built on this pass
@@ -284,6 +311,14 @@ class Forward(Technique):
         return view, proj
 
     def render(self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int | None = None) -> np.ndarray:
+        total, n_frames = self.accumulate(size=size, seed=seed, spp=spp)
+        return self.resolve(total, n_frames)
+
+    def accumulate(
+        self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int | None = None, first_frame: int = 0
+    ) -> tuple[np.ndarray, int]:
+        """Draw the frames of ``spp`` samples (frame indices from ``first_frame``: a progressive caller goes on
+        where it stopped) and return their float64 sum at the supersampled size, and how many frames."""
         if self.scene is None:
             raise RuntimeError("call prepare(scene) before render()")
         ctx = self.ctx
@@ -295,29 +330,51 @@ class Forward(Technique):
         target = HDRTarget(ctx, width * s, height * s)
         total = None
         try:
-            for frame in range(n_frames):
+            for frame in range(first_frame, first_frame + n_frames):
                 with self.timer.frame():
                     self._draw(target, view_proj, vp_bytes, frame, seed)
                 image = target.read()  # read-back is not part of the frame time
                 total = image.astype(np.float64) if total is None else total + image
         finally:
             target.release()
+        self._supersample = s
+        return total, n_frames
+
+    def resolve(self, total: np.ndarray, n_frames: int) -> np.ndarray:
+        """The image of an accumulated sum: the mean of its frames, box-filtered down by the supersampling."""
         image = (total / n_frames).astype(np.float32)
+        s = self._supersample
         if s > 1:
+            height, width = image.shape[0] // s, image.shape[1] // s
             image = image.reshape(height, s, width, s, 3).mean(axis=(1, 3), dtype=np.float64).astype(np.float32)
         return image
 
+    def set_camera(self, camera) -> bool:
+        """Move the camera without preparing again: only the clip planes depend on it."""
+        self.scene = self.scene.model_copy(update={"camera": camera})
+        self._near, self._far = clip_planes_of_sphere(np.asarray(camera.position, np.float64), *self._bounds)
+        return True
+
     def _draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
         ctx = self.ctx
+        role = self.role
         radiance = self.params.output == "radiance"  # AOVs keep 0 where no surface is seen
         color = self.scene.background_color() if radiance else (0.0, 0.0, 0.0)
-        target.use(clear=(*(color if color is not None else (0.0, 0.0, 0.0)), 1.0))  # a constant background is a clear
+        if role.clear:
+            target.use(clear=(*(color if color is not None else (0.0, 0.0, 0.0)), 1.0))  # a constant background
+        else:
+            target.bind()
         ctx.enable(ctx.DEPTH_TEST)
         ctx.disable(ctx.CULL_FACE)
+        if role.additive:  # the same surfaces again, lit by other lights: add where the depth is equal
+            ctx.depth_func = "<="
+            target.fbo.depth_mask = False
+            ctx.enable(ctx.BLEND)
+            ctx.blend_func = moderngl.ONE, moderngl.ONE
         for i, buf in enumerate(self._light_buffers):
             buf.bind_to_storage_buffer(i)
         eye = tuple(float(c) for c in self.scene.camera.position)
-        for program, vao, uniforms, textures in self._draws:
+        for program, vao, uniforms, textures in filter(None, self._draws):
             samplers = {}
             for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
                 texture.use(unit)
@@ -333,6 +390,13 @@ class Forward(Technique):
                 },
             )
             vao.render()
+        if role.additive:
+            ctx.disable(ctx.BLEND)
+            target.fbo.depth_mask = True
+            ctx.depth_func = "<"
+        if not role.extras:
+            ctx.disable(ctx.DEPTH_TEST)
+            return
         for emitter_program, vao, light, mask in self._emitters if self.params.output == "radiance" else []:
             if mask is not None:
                 mask.use(1)

@@ -113,6 +113,7 @@ class MonteCarlo(AreaLightTechnique):
     """Monte Carlo area lights: uniform, the document's two-region pdf, or light ⊕ lobe MIS (default)."""
 
     name: ClassVar[str] = "mc"
+    progressive: ClassVar[bool] = True
     summary: ClassVar[str] = "area lights: Monte Carlo (uniform, two-region pdf, MIS light+lobe), progressive"
     Params: ClassVar = MCParams
     area_glsl: ClassVar[str] = SHADERS + "mc.glsl"

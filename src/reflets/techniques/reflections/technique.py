@@ -38,11 +38,11 @@ from pydantic import Field
 from ...errors import ArgumentError
 from ...gpu import ProgramSpec, get_program, set_uniforms
 from ...reflections.scene import canonical_surface
-from ...reflections.surfaces import SampledSurface
 from ...scene.geometry import bounding_sphere, mesh_data
 from ...scene.lightmask import quad_uv
 from ...scene.meshdata import MeshData
 from ...scene.model import CylinderMesh, PlaneMesh, PolygonLight, QuadLight, Scene, SphereMesh, TorusMesh
+from ...scene.surfaces import SampledSurface
 from ..base import register_technique
 from ..forward import LIGHT_FLAGS, Forward, ForwardParams, polygon_normal
 
@@ -341,7 +341,7 @@ class Fermat(Forward):
     # ------------------------------------------------------------------ frame
     def _draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
         super()._draw(target, view_proj, vp_bytes, frame, seed)
-        if self.params.output != "radiance":
+        if self.params.output != "radiance" or not self.role.extras:
             return
         ctx = self.ctx
         gbuffer_fbo, reflection_fbo, position, normal, reflection = self._images(target.size)

@@ -64,6 +64,7 @@ class Scratches(Forward):
     """Scratched materials: the layered SV-BRDF, environment IS + thickened lights, progressive (docstring)."""
 
     name: ClassVar[str] = "scratches"
+    progressive: ClassVar[bool] = True
     summary: ClassVar[str] = "scratched / brushed materials: layered SV-BRDF, cone importance sampling, progressive"
     Params: ClassVar = ScratchesParams
 

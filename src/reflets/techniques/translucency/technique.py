@@ -173,7 +173,14 @@ class Translucency(Forward):
         self._light_maps = None
         self._screen = {}
         meshes = [mesh_data(scene, i) for i in range(len(scene.mesh))]
-        points = np.concatenate([m.positions for m in meshes]) if meshes else np.zeros((1, 3))
+        # the light view encloses the translucent meshes (the only ones reading it), not the whole scene: a
+        # light may stand anywhere outside them, and the map's texels are spent where they are read
+        lit = [
+            m
+            for m, mesh in zip(meshes, scene.mesh, strict=True)
+            if isinstance(scene.materials[mesh.material], Translucent)
+        ]
+        points = np.concatenate([m.positions for m in lit or meshes]) if meshes else np.zeros((1, 3))
         self._light_view_proj, self._shadow_bias = self._light_camera(points)
         super().prepare(scene)  # releases the previous scene's resources, then asks for the light maps
         position, normal = self._light_view_textures()
@@ -223,7 +230,7 @@ class Translucency(Forward):
         dist = np.linalg.norm(center - eye)
         if dist <= radius * 1.01:
             raise ArgumentError(
-                "the translucent technique needs the point light outside the scene's bounding sphere "
+                "the translucent technique needs the point light outside the translucent meshes' bounding sphere "
                 f"(distance {dist:.3g} ≤ radius {radius:.3g})",
                 field="light[0].position",
             )

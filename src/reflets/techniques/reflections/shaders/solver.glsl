@@ -1,6 +1,6 @@
 // Provides fermat_reflection(E, V): the reflection point P on the reflector of the vertex V seen from the eye E,
 // the stationary point of d(u, v) = |E − f| + |V − f| (Fermat). GLSL twin of reflets/reflections/solver.py
-// (solve_robust, solve_document) on the surfaces of reflets/reflections/surfaces.py; the tests compare them.
+// (solve_robust, solve_document) on the surfaces of reflets/scene/surfaces.py; the tests compare them.
 //
 // Flags: SURFACE_KIND (1 sphere, 2 torus, 3 open cylinder, 4 plane, 5 sampled into a texture), SOLVER (0 robust: safeguarded Newton with
 // the analytic Hessian in a local chart; 1 document: the triangle secant of §3.3), ITERATIONS, COUNT_ITERATIONS

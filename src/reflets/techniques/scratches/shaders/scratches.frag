@@ -66,7 +66,7 @@ vec3 from_cone(float theta, float phi, vec2 d) {
     return vec3(st * d.x - sv * d.y, st * d.y + sv * d.x, cv);
 }
 
-#if N_POINT > 0 || N_DIR > 0
+#if N_POINT > 0 || N_DIR > 0 || N_AREA > 0
 // Σ_k α_k/max(ᾱ,1) L_k for one thickened light of irradiance E from local direction wl.
 vec3 thick_light(vec3 wo, vec3 wl, vec3 E, float norm, inout uint rng) {
     float H = s_thickness;
@@ -142,6 +142,22 @@ void main() {
 #if N_DIR > 0
         for (int i = 0; i < N_DIR; ++i) {
             sum += thick_light(wo, transpose(frame) * dir_data[2 * i].xyz, dir_data[2 * i + 1].rgb, norm, rng);
+        }
+#endif
+#if N_AREA > 0
+        // quad / polygon lights: each midpoint sample of the emitter (the forward pass's area_samples² per quad)
+        // as a thickened light of irradiance L cosθ_y dA / r² — the lobes see the emitter as that many small
+        // sources, smoothed by the thickening (documented approximation; converges as area_samples grows)
+        for (int i = 0; i < N_AREA; ++i) {
+            vec4 p = area_data[3 * i];
+            vec4 nl = area_data[3 * i + 1];
+            vec3 d = p.xyz - v_position;
+            float r2 = dot(d, d);
+            vec3 wi = d * inversesqrt(r2);
+            float cos_y = -dot(nl.xyz, wi);
+            if (nl.w > 0.5) cos_y = abs(cos_y);
+            if (cos_y <= 0.0) continue;
+            sum += thick_light(wo, transpose(frame) * wi, area_data[3 * i + 2].rgb * (cos_y * p.w / r2), norm, rng);
         }
 #endif
 #if S_ENV_SAMPLES > 0

@@ -1,0 +1,175 @@
+"""`reflets bench renderer`: the persistent renderer on the showcase, and how a frame grows with lights and meshes.
+
+- showcase (``60_showcase.toml``, method ``auto``): prepare time; a camera orbit through one ``Renderer``
+  (``set_camera`` + ``render`` per frame) against the same frames through one-shot ``reflets.render()`` (every
+  k-th frame: one-shot frames cost seconds on a software rasteriser), the two images compared; the cost of each
+  pass of one frame (a ``ctx.finish()`` after each pass);
+- scaling: a GGX sphere on a floor with 1, 4, 16 point lights, 1, 4 quad lights, and 1, 10, 100 sphere
+  instances, median frame of a persistent renderer.
+
+Frame times are wall clock around ``ctx.finish()`` (llvmpipe's timer queries mean nothing), medians, all rows of
+one table measured in the same run.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+import numpy as np
+
+from ..demo import scene_path
+from ..metrics import compare
+from ..scene import load_dict, load_scene
+from . import register_suite
+
+
+def _orbit(scene, frames: int) -> list[dict]:
+    """Camera positions on a circle around the look-at point at the scene camera's distance and height."""
+    cam = scene.camera
+    eye, target = np.asarray(cam.position, float), np.asarray(cam.look_at, float)
+    offset = eye - target
+    radius, height = float(np.hypot(offset[0], offset[2])), float(offset[1])
+    start = float(np.arctan2(offset[0], offset[2]))
+    angles = start + np.linspace(-0.5, 0.5, frames)  # ±0.5 rad: the objects stay in view
+    return [
+        {
+            "position": (
+                float(target[0] + radius * np.sin(a)),
+                float(target[1] + height),
+                float(target[2] + radius * np.cos(a)),
+            )
+        }
+        for a in angles
+    ]
+
+
+def _showcase(size, frames: int, one_shot_every: int) -> tuple[dict, list[str]]:
+    import reflets
+
+    scene = load_scene(scene_path("60_showcase.toml"))
+    t0 = time.perf_counter()
+    renderer = reflets.Renderer(scene, size=size)
+    prepare_ms = 1e3 * (time.perf_counter() - t0)
+    renderer.render()  # the first frame compiles the programs: not an orbit frame
+    persistent, one_shot, errors = [], [], []
+    for k, camera in enumerate(_orbit(scene, frames)):
+        t = time.perf_counter()
+        renderer.set_camera(**camera)
+        image = renderer.render()
+        persistent.append(1e3 * (time.perf_counter() - t))
+        if k % one_shot_every == 0:
+            t = time.perf_counter()
+            fresh = reflets.render(renderer.scene, size=size)
+            one_shot.append(1e3 * (time.perf_counter() - t))
+            errors.append(compare(image, fresh)["relmse"])
+    technique = renderer._technique
+    technique.measure_passes = True
+    renderer.render()
+    passes = [{"pass": m, "meshes": n, "ms": ms} for m, n, ms in technique.pass_costs()]
+    renderer.release()
+    result = {
+        "size": list(size),
+        "prepare_ms": prepare_ms,
+        "orbit_frames": frames,
+        "persistent_frame_ms_median": statistics.median(persistent),
+        "one_shot_frames": len(one_shot),
+        "one_shot_frame_ms_median": statistics.median(one_shot),
+        "persistent_vs_one_shot_relmse_max": max(errors),
+        "passes": passes,
+    }
+    ratio = result["one_shot_frame_ms_median"] / result["persistent_frame_ms_median"]
+    lines = [
+        f"## Showcase ({size[0]}×{size[1]}, method auto)",
+        "",
+        "| prepare | orbit frame, persistent Renderer (median of "
+        f"{frames}) | same frames, one-shot `reflets.render()` (median of {len(one_shot)}) | ratio | "
+        "largest relative MSE between the two |",
+        "|---|---|---|---|---|",
+        f"| {prepare_ms:.0f} ms | {result['persistent_frame_ms_median']:.1f} ms | "
+        f"{result['one_shot_frame_ms_median']:.1f} ms | {ratio:.1f}× | {max(errors):.1e} |",
+        "",
+        "Cost of each pass of one frame (a `ctx.finish()` after each):",
+        "",
+        "| pass | meshes it shades | ms |",
+        "|---|---|---|",
+        *[f"| {p['pass']} | {p['meshes']} | {p['ms']:.1f} |" for p in passes],
+        "",
+    ]
+    return result, lines
+
+
+def _scaling_scene(size, points: int = 1, quads: int = 0, instances: int = 1) -> dict:
+    rng = np.random.default_rng(1)
+    lights = []
+    for i in range(points):
+        a = 2 * np.pi * i / points
+        lights.append({"type": "point", "position": [2 * np.cos(a), 2.5, 2 * np.sin(a)], "intensity": [8 / points] * 3})
+    for i in range(quads):
+        x = -1.5 + 3.0 * i / max(quads - 1, 1)
+        lights.append(
+            {
+                "type": "quad",
+                "corners": [[x - 0.3, 2.5, -0.3], [x + 0.3, 2.5, -0.3], [x - 0.3, 2.5, 0.3]],
+                "radiance": [3] * 3,
+            }
+        )
+    side = int(np.ceil(np.sqrt(instances)))
+    meshes = [{"shape": "plane", "size": [8, 8], "material": "floor"}]
+    for i in range(instances):
+        x, z = (i % side) - (side - 1) / 2, (i // side) - (side - 1) / 2
+        scale = 2.0 / side
+        meshes.append(
+            {
+                "shape": "sphere",
+                "radius": 0.4 * scale,
+                "segments": [32, 16],
+                "material": "ggx",
+                "transform": {"translate": [x * scale, 0.4 * scale + 0.01 * rng.random(), z * scale]},
+            }
+        )
+    return {
+        "camera": {"position": [0, 2.5, 4.0], "look_at": [0, 0.2, 0], "fov_y": 45, "size": list(size)},
+        "materials": {
+            "floor": {"type": "lambert", "albedo": [0.5, 0.5, 0.5]},
+            "ggx": {"type": "microfacet", "distribution": "ggx", "alpha": 0.3, "diffuse": [0.3, 0.2, 0.1]},
+        },
+        "mesh": meshes,
+        "light": lights,
+    }
+
+
+def _scaling(size, frames: int) -> tuple[list[dict], list[str]]:
+    import reflets
+
+    cases = [("point lights", n, {"points": n}) for n in (1, 4, 16)]
+    cases += [("quad lights (ltc)", n, {"points": 0, "quads": n}) for n in (1, 4)]
+    cases += [("sphere instances", n, {"instances": n}) for n in (1, 10, 100)]
+    rows = []
+    for what, n, kwargs in cases:
+        with reflets.Renderer(load_dict(_scaling_scene(size, **kwargs))) as renderer:
+            renderer.render()
+            times = []
+            for _ in range(frames):
+                t = time.perf_counter()
+                renderer.render()
+                times.append(1e3 * (time.perf_counter() - t))
+        rows.append({"what": what, "count": n, "frame_ms_median": statistics.median(times), "frames": frames})
+    lines = [
+        f"## Frame time against lights and meshes ({size[0]}×{size[1]}, method auto, median of {frames} frames)",
+        "",
+        "| what | count | frame (ms) |",
+        "|---|---|---|",
+        *[f"| {r['what']} | {r['count']} | {r['frame_ms_median']:.1f} |" for r in rows],
+        "",
+    ]
+    return rows, lines
+
+
+@register_suite("renderer")
+def bench_renderer(quick: bool, out_dir) -> tuple[dict, str]:
+    size, frames, every = ((160, 120), 6, 3) if quick else ((640, 480), 60, 10)
+    showcase, lines = _showcase(size, frames, every)
+    scaling, more = _scaling((160, 120) if quick else (640, 480), 3 if quick else 9)
+    text = ["# The persistent renderer", "", *lines, *more]
+    return {"showcase": showcase, "scaling": scaling}, "\n".join(text)

@@ -1,0 +1,82 @@
+"""Warnings about scenes that render without error but not as the user meant: no silent black.
+
+A light facing away from every mesh, or a whole-frame method that ignores part of the scene (``analytic`` on a
+glossy material, ``ltc`` on a mirror reflector…), renders an image that is darker than the scene says and exits
+0. Each such case is one line on stderr (``RefletsWarning``; the CLI prints it as ``reflets: warning: …``).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .scene.model import PolygonLight, QuadLight, Scene
+
+
+class RefletsWarning(UserWarning):
+    """The scene renders, but part of it is ignored or unlit."""
+
+
+#: methods that shade each kind of material with its own technique (others fall back as the message says)
+OWN_METHOD = {
+    "translucent": ("auto", "translucent"),
+    "scratched": ("auto", "scratches"),
+    "reflector": ("auto", "fermat"),
+}
+#: methods whose output is not radiance: nothing to warn about
+AOV_METHODS = ("position", "normal", "uv")
+
+
+def scene_warnings(scene: Scene, method: str) -> list[str]:
+    """One line per part of ``scene`` that ``method`` leaves unlit or ignores."""
+    from .scene.geometry import mesh_data
+
+    if method in AOV_METHODS:
+        return []
+    messages = []
+    points = [mesh_data(scene, i).positions for i in range(len(scene.mesh))]
+    allpoints = np.concatenate(points) if points else np.zeros((0, 3))
+    for i, light in enumerate(scene.light):
+        if isinstance(light, QuadLight | PolygonLight) and not light.two_sided and len(allpoints):
+            poly = light.polygon()
+            normal = np.sum(np.cross(poly, np.roll(poly, -1, axis=0)), axis=0)
+            if np.all((allpoints - poly[0]) @ normal <= 0.0):
+                messages.append(
+                    f"light[{i}] ({light.type}) faces away from every mesh and lights nothing "
+                    "(reverse its corner order or set two_sided = true)"
+                )
+    for name, material in scene.materials.items():
+        used = [i for i, mesh in enumerate(scene.mesh) if mesh.material == name]
+        if not used:
+            continue
+        kind = "reflector" if all(scene.mesh[i].reflector for i in used) else material.type
+        own = OWN_METHOD.get(kind)
+        if own is not None and method not in own:
+            what = {
+                "translucent": "by its far-field BRDF only (no subsurface transport)",
+                "scratched": "by its base BRDF only (no scratch lobes)",
+                "reflector": "without its mirror reflections (only the non-specular part)",
+            }[kind]
+            messages.append(
+                f"materials.{name}: method '{method}' renders this {kind} material {what}; use {' or '.join(own)}"
+            )
+        if method == "analytic" and _has_glossy_part(material) and _has_area_light(scene):
+            messages.append(
+                f"materials.{name}: method 'analytic' integrates only Lambertian parts under quad / polygon lights; "
+                f"this {material.type} material's glossy part gets no area light (use ltc or auto)"
+            )
+    return messages
+
+
+def warn_scene(scene: Scene, method: str) -> None:
+    for message in scene_warnings(scene, method):
+        warnings.warn(message, RefletsWarning, stacklevel=3)
+
+
+def _has_area_light(scene: Scene) -> bool:
+    return any(isinstance(light, QuadLight | PolygonLight) for light in scene.light)
+
+
+def _has_glossy_part(material) -> bool:
+    return material.type != "lambert"

@@ -1,0 +1,157 @@
+"""``reflets.Renderer``: a scene prepared once, then drawn, edited and drawn again.
+
+``reflets.render()`` builds every GPU resource, draws, and frees them: right for one image, wasteful for a frame
+loop (the ltc Phong table fit alone is seconds). A ``Renderer`` keeps the prepared technique and applies edits
+by what they invalidate:
+
+- ``set_camera``: the camera only — techniques move it without preparing again (a uniform and the clip planes);
+- ``set_light`` / ``set_material`` / ``set_transform``: the technique prepares again, but meshes come from a
+  content-keyed cache (``reflets.scene.geometry``: only the edited mesh is rebuilt), programs from the program
+  cache and fitted tables (LTC, scratch tables) from theirs, so the cost is the upload, not the build.
+
+After any sequence of edits the image is the one-shot ``reflets.render()`` of the edited scene (tested). Progressive
+methods (``mc``, ``scratches``) go on accumulating frames across ``render()`` calls while nothing changes, and
+restart after an edit, a new seed or a new spp.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..diagnostics import warn_scene
+from ..errors import ArgumentError, SceneError
+from ..scene import Scene, load_dict
+
+#: the transform fields ``set_transform`` takes
+TRANSFORM_FIELDS = ("translate", "rotate", "scale")
+
+
+class Renderer:
+    """A prepared scene and its technique: ``render()`` per frame, ``set_*`` to edit, ``release()`` (or ``with``).
+
+    Parameters are those of :func:`reflets.render`; ``method=None`` takes the scene's method or ``auto``.
+    """
+
+    def __init__(
+        self, scene: Scene | str | Path | dict, method: str | None = None, size: tuple[int, int] | None = None, **params
+    ):
+        from ..arguments import as_scene, check_size
+        from ..gpu import get_context
+        from ..techniques import get_technique
+        from .compose import DEFAULT_METHOD
+
+        self.scene = as_scene(scene)
+        self.size = check_size(size)
+        self.method = method or self.scene.method or DEFAULT_METHOD
+        self._technique = get_technique(self.method)(get_context(), **params)
+        self._stale = True  # the technique must prepare (again) before the next frame
+        self._accumulated: tuple | None = None  # progressive: (key, float64 sum, frames)
+        self.stats: dict[str, float] = {"prepare_ms": 0.0, "frame_ms": 0.0, "frames": 0, "prepares": 0}
+        warn_scene(self.scene, self.method)
+        self._prepare()
+
+    # ------------------------------------------------------------------ frames
+    def render(self, seed: int = 0, spp: int | None = None) -> np.ndarray:
+        """The current image: float32 (H, W, 3), linear radiance, row 0 = top. A progressive method adds this
+        call's frames to those of earlier calls with the same seed and spp since the last edit."""
+        from ..arguments import check_spp
+
+        check_spp(spp)
+        if self._technique is None:
+            raise ArgumentError("this Renderer was released", field="render")
+        if self._stale:
+            self._prepare()
+        t0 = time.perf_counter()
+        key = (int(seed), spp)
+        first = 0
+        if self._technique.progressive and self._accumulated is not None and self._accumulated[0] == key:
+            _, previous, first = self._accumulated
+        total, frames = self._technique.accumulate(size=self.size, seed=seed, spp=spp, first_frame=first)
+        if first:
+            total, frames = previous + total, first + frames
+        self._accumulated = (key, total, frames) if self._technique.progressive else None
+        image = self._technique.resolve(total, frames)
+        self.stats["frame_ms"] = 1e3 * (time.perf_counter() - t0)
+        self.stats["frames"] = frames
+        return image
+
+    # ------------------------------------------------------------------ edits
+    def set_camera(self, **fields: Any) -> None:
+        """Change camera fields (``position``, ``look_at``, ``up``, ``fov_y``, ``size``)."""
+        data = self._scene_dict()
+        data["camera"] = {**data["camera"], **fields}
+        self.scene = self._validated(data)
+        self._accumulated = None
+        if not self._stale and not self._technique.set_camera(self.scene.camera):
+            self._stale = True
+
+    def set_light(self, index: int, **fields: Any) -> None:
+        """Change fields of ``scene.light[index]`` (any field of that light's type)."""
+        data = self._scene_dict()
+        self._check_index(index, data["light"], "light")
+        data["light"][index] = {**data["light"][index], **fields}
+        self._edited(data)
+
+    def set_material(self, name: str, **fields: Any) -> None:
+        """Change fields of the material called ``name`` (any field of its type; ``type`` replaces the model)."""
+        data = self._scene_dict()
+        if name not in data["materials"]:
+            allowed = ", ".join(data["materials"]) or "none"
+            raise SceneError(f"unknown material {name!r}; the scene has: {allowed}", field="materials")
+        base = {} if "type" in fields else data["materials"][name]
+        data["materials"][name] = {**base, **fields}
+        self._edited(data)
+
+    def set_transform(self, index: int, **fields: Any) -> None:
+        """Change ``scene.mesh[index].transform`` (``translate``, ``rotate`` in degrees, ``scale``)."""
+        unknown = sorted(set(fields) - set(TRANSFORM_FIELDS))
+        if unknown:
+            raise SceneError(f"unknown transform field {unknown[0]!r}; allowed: {', '.join(TRANSFORM_FIELDS)}")
+        data = self._scene_dict()
+        self._check_index(index, data["mesh"], "mesh")
+        mesh = data["mesh"][index]
+        mesh["transform"] = {**mesh.get("transform", {}), **fields}
+        self._edited(data)
+
+    # ------------------------------------------------------------------ lifetime
+    def release(self) -> None:
+        """Free the GPU resources (the renderer cannot draw afterwards)."""
+        if self._technique is not None:
+            self._technique.release()
+            self._technique = None
+
+    def __enter__(self) -> Renderer:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    # ------------------------------------------------------------------ internals
+    def _prepare(self) -> None:
+        t0 = time.perf_counter()
+        self._technique.prepare(self.scene)
+        self._stale = False
+        self._accumulated = None
+        self.stats["prepare_ms"] = 1e3 * (time.perf_counter() - t0)
+        self.stats["prepares"] += 1
+
+    def _scene_dict(self) -> dict:
+        return self.scene.model_dump(exclude={"base_dir"}, exclude_none=True)
+
+    def _validated(self, data: dict) -> Scene:
+        return load_dict(data, base_dir=self.scene.base_dir, source="<edit>")
+
+    def _edited(self, data: dict) -> None:
+        self.scene = self._validated(data)
+        warn_scene(self.scene, self.method)
+        self._stale = True
+        self._accumulated = None
+
+    @staticmethod
+    def _check_index(index: int, items: list, what: str) -> None:
+        if not isinstance(index, int) or not 0 <= index < len(items):
+            raise SceneError(f"no {what}[{index}]: the scene has {len(items)} (0…{len(items) - 1})", field=what)

@@ -1,0 +1,74 @@
+"""``auto``: every material type under every light type in one frame; composed frames equal their parts."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import reflets
+from reflets.diagnostics import RefletsWarning
+from reflets.metrics import compare
+
+from .scenes import LIGHTS, MATERIALS, lambert_merl, sphere_scene
+
+SIZE = (48, 36)
+
+
+@pytest.fixture(scope="module")
+def merl(tmp_path_factory):
+    return lambert_merl(tmp_path_factory.mktemp("merl") / "lambert.binary")
+
+
+@pytest.mark.parametrize("light", list(LIGHTS))
+@pytest.mark.parametrize("material", [*MATERIALS, "measured"])
+def test_every_material_under_every_light(ctx, material, light, merl):
+    image = reflets.render(sphere_scene(material, light, size=SIZE, merl=merl))
+    assert np.all(np.isfinite(image))
+    sphere = image[12:24, 18:30]  # the sphere's middle, lit by every light of these scenes
+    assert sphere.mean() > 1e-3, f"{material} under {light} renders black"
+
+
+def region_relmse(a: np.ndarray, b: np.ndarray, mask: np.ndarray) -> float:
+    return compare(a[mask][None], b[mask][None])["relmse"]
+
+
+def test_each_object_of_a_composed_frame_equals_its_own_technique(ctx):
+    """Translucent, scratched and GGX spheres side by side, apart (none shadows or reflects into another):
+    each one's pixels in the auto frame equal the single-technique render of a scene with it alone."""
+    size = (96, 40)
+    materials = {k: MATERIALS[k] for k in ("translucent", "scratched", "microfacet")}
+    meshes = [
+        {
+            "shape": "sphere",
+            "radius": 0.6,
+            "segments": [48, 24],
+            "material": name,
+            "transform": {"translate": [x, 0, 0]},
+        }
+        for name, x in zip(materials, (-1.5, 0.0, 1.5), strict=True)
+    ]
+    light = {"type": "point", "position": [0.0, 3.0, 3.0], "intensity": [15, 15, 15]}
+    base = {"camera": {"position": [0, 0.3, 4.5], "look_at": [0, 0, 0], "fov_y": 35, "size": list(size)}}
+    full = reflets.load_dict({**base, "materials": materials, "mesh": meshes, "light": [light]})
+    composed = reflets.render(full, spp=8)
+    methods = {"translucent": "translucent", "scratched": "scratches", "microfacet": "forward"}
+    for mesh in meshes:
+        alone = reflets.load_dict({**base, "materials": materials, "mesh": [mesh], "light": [light]})
+        own = reflets.render(alone, method=methods[mesh["material"]], spp=8 if mesh["material"] == "scratched" else 1)
+        mask = np.any(reflets.render(alone, method="position") != 0, axis=-1)
+        assert region_relmse(composed, own, mask) < 1e-3, mesh["material"]
+
+
+def test_a_light_facing_away_warns(ctx):
+    scene = sphere_scene("lambert", "quad", size=(16, 12))
+    c1, c2, c4 = scene["light"][0]["corners"]
+    scene["light"][0]["corners"] = [c1, c4, c2]  # emits upwards, away from the sphere
+    with pytest.warns(RefletsWarning, match=r"light\[0\] \(quad\) faces away from every mesh"):
+        reflets.render(scene)
+
+
+def test_a_method_that_ignores_a_material_warns(ctx):
+    with pytest.warns(RefletsWarning, match=r"materials.m: method 'ltc' renders this translucent material"):
+        reflets.render(sphere_scene("translucent", "quad", size=(16, 12)), method="ltc")
+    with pytest.warns(RefletsWarning, match=r"method 'analytic' integrates only Lambertian parts"):
+        reflets.render(sphere_scene("metal", "quad", size=(16, 12)), method="analytic")
