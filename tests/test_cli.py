@@ -142,7 +142,27 @@ BAD = {
     "unknown method": (lambda p, t: [str(_scene(p, t)), "--method", "raytrace"], "forward"),
     "bad spp": (lambda p, t: [str(_scene(p, t)), "--spp", "3"], "spp"),
     "unknown technique parameter": (lambda p, t: [str(_scene(p, t)), "--param", "samples=3"], "area_samples"),
+    "negative spp": (lambda p, t: [str(_scene(p, t)), "--spp", "-3"], "1..65536"),
+    "huge spp": (lambda p, t: [str(_scene(p, t)), "--spp", "1000000000000"], "1..65536"),
+    "supersampling beyond the driver": (lambda p, t: [str(_scene(p, t)), "--spp", "65536"], "at most"),
+    "empty environment grid": (lambda p, t: [str(_scene(p, t)), "--param", "env_grid=[0,0]"], "env_grid"),
+    "misspelt method": (lambda p, t: [str(_scene(p, t)), "--method", "fowrard"], "did you mean 'forward'"),
+    "misspelt key": (lambda p, t: [str(_scene(p, t.replace("fov_y", "fov")))], "did you mean 'fov_y'"),
+    "misspelt shape": (lambda p, t: [str(_scene(p, t.replace('"plane"', '"plnae"')))], "did you mean 'plane'"),
+    "binary scene file": (lambda p, t: [str(_binary(p))], "not a text file"),
+    "no pydantic internals": (
+        lambda p, t: [
+            str(_scene(p, t + '\n[[mesh]]\nshape = "sphere"\nmaterial = "floor"\ntransform = { scale = -1 }\n'))
+        ],
+        "mesh[1].transform.scale: input should be greater than 0",
+    ),
 }
+
+
+def _binary(tmp_path):
+    path = tmp_path / "scene.toml"
+    path.write_bytes(b"\x00\x01\xff\xfe not text")
+    return path
 
 
 @pytest.mark.parametrize("case", sorted(BAD))

@@ -72,3 +72,58 @@ def test_a_method_that_ignores_a_material_warns(ctx):
         reflets.render(sphere_scene("translucent", "quad", size=(16, 12)), method="ltc")
     with pytest.warns(RefletsWarning, match=r"method 'analytic' integrates only Lambertian parts"):
         reflets.render(sphere_scene("metal", "quad", size=(16, 12)), method="analytic")
+
+
+def test_the_cli_warns_in_one_line_and_exits_0(ctx, tmp_path, capsys):
+
+    from reflets.cli import main
+
+    scene = sphere_scene("lambert", "quad", size=(16, 12))
+    c1, c2, c4 = scene["light"][0]["corners"]
+    scene["light"][0]["corners"] = [c1, c4, c2]
+    toml = tmp_path / "away.toml"
+    toml.write_text(_toml(scene))
+    assert main(["render", str(toml), "-o", str(tmp_path / "x.exr")]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        "reflets: warning: light[0] (quad) faces away from every mesh and lights nothing "
+        "(reverse its corner order or set two_sided = true)"
+    ]
+
+
+def test_info_prints_how_auto_evaluates_each_pair(ctx, capsys):
+    import json
+
+    from reflets.cli import main
+
+    assert main(["info", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["auto"]
+    pairs = {(r["material"], r["light"]) for r in rows}
+    assert len(pairs) == 4 * 5 and all(r["evaluation"] for r in rows)
+
+
+def test_api_spp_is_checked():
+    from reflets.errors import ArgumentError
+
+    with pytest.raises(ArgumentError, match="spp"):
+        reflets.render(sphere_scene("lambert", "point"), spp=-1)
+
+
+def _toml(scene: dict) -> str:
+    """A scene dict as TOML (inline tables; enough for these scenes)."""
+
+    def value(v):
+        if isinstance(v, dict):
+            return "{ " + ", ".join(f"{k} = {value(x)}" for k, x in v.items()) + " }"
+        if isinstance(v, list | tuple):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return f'"{v}"'
+        return repr(v)
+
+    lines = [f"camera = {value(scene['camera'])}"]
+    lines += [f"materials.{name} = {value(spec)}" for name, spec in scene["materials"].items()]
+    lines += [f"mesh = {value(scene['mesh'])}", f"light = {value(scene['light'])}"]
+    return "\n".join(lines) + "\n"

@@ -37,7 +37,7 @@ from ..gpu import FrameTimer, HDRTarget
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scratches.material import Scratched
 from ..techniques.base import Technique, TechniqueParams, get_technique, register_technique
-from ..techniques.forward import Forward, GridSide, PassRole, samples_per_pixel_side
+from ..techniques.forward import Forward, GridSide, PassRole, check_target_size, samples_per_pixel_side
 
 #: the method of a scene that names none
 DEFAULT_METHOD = "auto"
@@ -192,6 +192,7 @@ class Auto(Technique):
             raise RuntimeError("call prepare(scene) before render()")
         n_frames, s = self.frames(self.default_spp if spp is None else spp)
         width, height = size or self.scene.camera.size
+        check_target_size(self.ctx, width, height, s)
         view, proj = self.final.camera_matrices(width, height)
         view_proj = proj @ view
         vp_bytes = view_proj.T.astype(np.float32).tobytes()

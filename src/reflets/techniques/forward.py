@@ -98,6 +98,17 @@ def polygon_normal(p: np.ndarray) -> np.ndarray:
     return n / np.linalg.norm(n)
 
 
+def check_target_size(ctx, width: int, height: int, s: int) -> None:
+    """The supersampled target must fit the driver's largest framebuffer (else "framebuffer not complete")."""
+    limit = int(ctx.info.get("GL_MAX_TEXTURE_SIZE", 16384))
+    if max(width, height) * s > limit:
+        raise ArgumentError(
+            f"{s}×{s} supersampling of {width}x{height} needs a {width * s}x{height * s} target; this GL driver "
+            f"allows at most {limit} per side (use fewer spp or a smaller size)",
+            field="spp",
+        )
+
+
 def samples_per_pixel_side(spp: int) -> int:
     s = math.isqrt(spp)
     if spp < 1 or s * s != spp:
@@ -324,6 +335,7 @@ class Forward(Technique):
         ctx = self.ctx
         n_frames, s = self.frames(self.default_spp if spp is None else spp)
         width, height = size or self.scene.camera.size
+        check_target_size(ctx, width, height, s)
         view, proj = self.camera_matrices(width, height)
         view_proj = proj @ view
         vp_bytes = view_proj.T.astype(np.float32).tobytes()  # GLSL matrices are column-major
