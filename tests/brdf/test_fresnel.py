@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from reflets.brdf.fresnel import GOLD_ETA, GOLD_K, fresnel_conductor, fresnel_dielectric, fresnel_schlick
+from reflets.fresnel import GOLD_ETA, GOLD_K, fresnel_conductor, fresnel_dielectric, fresnel_schlick
 
 COS = np.linspace(0.0, 1.0, 1001)
 

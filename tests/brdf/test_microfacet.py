@@ -9,8 +9,8 @@ from brdf_checks import check_glsl_parity, run_standard_checks, upper_hemisphere
 from pydantic import ValidationError
 from scipy.special import erf
 
-from reflets.brdf.fresnel import GOLD_ETA, GOLD_K
 from reflets.brdf.microfacet import Distribution, Microfacet
+from reflets.fresnel import GOLD_ETA, GOLD_K
 
 # ------------------------------------------------------------------------------------------ quadrature
 

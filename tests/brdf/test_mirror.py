@@ -7,8 +7,8 @@ import pytest
 from pydantic import ValidationError
 
 from reflets.brdf import Mirror
-from reflets.brdf.fresnel import GOLD_ETA, GOLD_K, fresnel_conductor
 from reflets.brdf.gpu_eval import eval_glsl
+from reflets.fresnel import GOLD_ETA, GOLD_K, fresnel_conductor
 
 
 def test_eval_is_the_lambertian_part_only(rng):

@@ -8,12 +8,12 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from reflets.brdf import Lambert, Scratched
+from reflets.brdf import Lambert
 from reflets.errors import SceneError
 from reflets.scene import load_dict
 from reflets.scene.environment import environment_grid
 from reflets.scratches import build_table, shading
-from reflets.scratches.material import PRESETS, bake_layer, cached_alpha, mip_levels
+from reflets.scratches.material import PRESETS, Scratched, bake_layer, cached_alpha, mip_levels
 from reflets.scratches.tracer2d import phi_bins
 
 SMALL = dict(profile="vgroove:0.5", table_size=32, rays=2000, alpha_size=64)

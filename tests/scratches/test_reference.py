@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from reflets.brdf.fresnel import GOLD_ETA, GOLD_K
 from reflets.brdf.microfacet import Microfacet
+from reflets.fresnel import GOLD_ETA, GOLD_K
 from reflets.scratches.reference import (
     ConeLight,
     Lighting,

@@ -1,10 +1,9 @@
-"""BRDF library: material models (NumPy reference + GLSL twin), selectable by ``type`` in scene files."""
+"""BRDF library: material models (NumPy reference + GLSL twin), selectable by ``type`` in scene files.
+
+The scene-file union of every material (``reflets.scene.materials.MaterialSpec``) lives above this package: it
+also names materials of technique packages (``scratched``) that build on these models."""
 
 from __future__ import annotations
-
-from typing import Annotated
-
-from pydantic import Field
 
 from .ashikhmin_shirley import AshikhminShirley
 from .base import MATERIALS, Material, register_material
@@ -18,29 +17,9 @@ from .phong import Phong
 from .translucent import Translucent
 from .ward import Ward
 
-# isort: split
-from ..scratches.material import Scratched  # registered after the base materials it nests
-
-#: the scene-file form of any registered material, chosen by its ``type`` key
-MaterialSpec = Annotated[
-    Lambert
-    | Phong
-    | BlinnPhong
-    | Lafortune
-    | Ward
-    | AshikhminShirley
-    | Microfacet
-    | Measured
-    | Translucent
-    | Mirror
-    | Scratched,
-    Field(discriminator="type"),
-]
-
 __all__ = [
     "MATERIALS",
     "Material",
-    "MaterialSpec",
     "register_material",
     "Lambert",
     "Phong",
@@ -52,5 +31,4 @@ __all__ = [
     "Measured",
     "Translucent",
     "Mirror",
-    "Scratched",
 ]

@@ -17,6 +17,7 @@ import numpy as np
 from pydantic import Field, model_validator
 from scipy.special import erfcx
 
+from ..fresnel import GOLD_ETA, GOLD_K, fresnel_conductor, fresnel_dielectric, fresnel_schlick
 from .base import (
     RGB,
     Material,
@@ -32,7 +33,6 @@ from .base import (
     sample_mixture,
     upper,
 )
-from .fresnel import GOLD_ETA, GOLD_K, fresnel_conductor, fresnel_dielectric, fresnel_schlick
 
 _SQRT_PI = np.sqrt(np.pi)
 

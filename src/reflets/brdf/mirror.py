@@ -13,8 +13,8 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from ..fresnel import GOLD_ETA, GOLD_K, fresnel_conductor
 from .base import RGB, Material, Reflectance, register_material, upper
-from .fresnel import GOLD_ETA, GOLD_K, fresnel_conductor
 
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 

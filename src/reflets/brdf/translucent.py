@@ -21,9 +21,9 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from ..fresnel import fresnel_dielectric
 from ..translucency.optics import beckmann_d, fresnel_transmittance
 from .base import RGB, Material, register_material, upper
-from .fresnel import fresnel_dielectric
 
 
 @register_material

@@ -78,12 +78,38 @@ class _Assembler:
         return "\n".join(out)
 
 
-def assemble(name: str, slots: dict[str, str] | None = None, flags: dict[str, object] | None = None):
+def glsl_literal(value) -> str:
+    """A Python number (or bool) as a GLSL literal: ints stay ints, floats always carry a point or exponent."""
+    if isinstance(value, bool):
+        return "1" if value else "0"
+    if isinstance(value, int):
+        return str(value)
+    text = repr(float(value))
+    return text if any(c in text for c in ".e") else text + ".0"
+
+
+def shared_constants(**groups: dict[str, object]) -> tuple[tuple[str, str], ...]:
+    """``#define``s from Python objects a NumPy twin also reads: ``shared_constants(SURFACE={"sphere": 1})``
+    gives ``SURFACE_SPHERE 1`` — one source for both sides, so a code or a tolerance cannot drift apart."""
+    return tuple(
+        (f"{prefix}_{key.upper()}", glsl_literal(value))
+        for prefix, mapping in groups.items()
+        for key, value in mapping.items()
+    )
+
+
+def assemble(
+    name: str,
+    slots: dict[str, str] | None = None,
+    flags: dict[str, object] | None = None,
+    constants: tuple[tuple[str, str], ...] = (),
+):
     """Full source of one stage and the list of file names indexed by the ``#line`` source numbers.
 
-    Every stage starts with ``#version``, the flags as ``#define``s, then the shared constants file.
+    Every stage starts with ``#version``, the program's shared constants and the flags as ``#define``s, then
+    the shared constants file.
     """
-    defines = []
+    defines = [f"#define {key} {value}" for key, value in constants]
     for key, value in sorted((flags or {}).items()):
         if value is True:
             defines.append(f"#define {key} 1")
@@ -119,6 +145,8 @@ class ProgramSpec:
     flags: frozenset[str] = frozenset()
     #: vertex outputs captured by transform feedback (a vertex-only program read back per vertex)
     varyings: tuple[str, ...] = ()
+    #: named constants shared with a NumPy twin (``shared_constants``), emitted as ``#define``s
+    constants: tuple[tuple[str, str], ...] = ()
 
 
 _CACHE: dict[tuple, object] = {}
@@ -145,7 +173,7 @@ def get_program(ctx, spec: ProgramSpec, *, slots: dict[str, str] | None = None, 
         name = getattr(spec, stage)
         if name is None:
             continue
-        source, files = assemble(name, slots, flags)
+        source, files = assemble(name, slots, flags, spec.constants)
         stages[stage] = source
         all_files[stage] = files
     try:

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..scene.environment import equirect_direction, equirect_uv, lookup, rotation_y
+from ..equirect import equirect_direction, equirect_uv, rotation_y
+from ..scene.environment import lookup
 from ..scene.lightmask import mask_lookup, quad_uv
 from ..scene.model import EnvironmentLight, PolygonLight, QuadLight
 

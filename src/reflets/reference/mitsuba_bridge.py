@@ -306,8 +306,9 @@ def environment_for_mitsuba(image: np.ndarray) -> np.ndarray:
 
 
 def _environment_emitter(scene: Scene, light: EnvironmentLight, workdir: Path) -> dict[str, Any]:
+    from ..equirect import rotation_y
     from ..imageio import write_image
-    from ..scene.environment import load_environment, rotation_y
+    from ..scene.environment import load_environment
 
     image = load_environment(scene)
     path = write_image(workdir / "environment.exr", environment_for_mitsuba(image))

@@ -26,6 +26,38 @@ import numpy as np
 
 from reflets.scene.surfaces import Chart, IdentityChart, Sphere, Surface, _dot, _unit
 
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Tolerances and trust-region settings of both solvers: the NumPy defaults here, and the ``FERMAT_*``
+    ``#define``s of solver.glsl (``glsl_constants``) — one source, so the twins cannot drift apart."""
+
+    tol: float = 1e-5  # NumPy (float64): residual below which a point has converged
+    gpu_tol: float = 1e-4  # the GLSL twin's (float32: 1e-5 is at rounding level)
+    max_angle: float = 0.5  # robust: initial trust region, radians the normal may turn along a step
+    max_step: float = 0.25  # robust: initial trust region in chart units (bounds steps on flat parts)
+    guess_angle: float = 0.1  # robust: the tangent-plane guess moves the normal by at most this
+    accept: float = 4.0  # robust: a step may multiply |∇d|² by at most this
+    min_edge: float = 0.02  # document: the initial triangle's smallest edge
+    min_size: float = 1e-10  # document: stop when the triangle is smaller
+
+
+SETTINGS = SolverSettings()
+#: SURFACE_KIND codes of solver.glsl (``SURFACE_SPHERE``…) and SOLVER codes (``SOLVER_ROBUST``…)
+SURFACE_KINDS = {"sphere": 1, "torus": 2, "cylinder": 3, "plane": 4, "sampled": 5}
+SOLVERS = {"robust": 0, "document": 1}
+
+
+def glsl_constants() -> tuple[tuple[str, str], ...]:
+    """The ``#define``s solver.glsl reads: FERMAT_* settings, SURFACE_* kinds, SOLVER_* codes."""
+    from ..gpu.programs import shared_constants
+
+    fermat = {
+        **{k: getattr(SETTINGS, k) for k in ("max_angle", "max_step", "guess_angle", "accept", "min_edge", "min_size")}
+    }
+    return shared_constants(FERMAT={"tol": SETTINGS.gpu_tol, **fermat}, SURFACE=SURFACE_KINDS, SOLVER=SOLVERS)
+
+
 SQRT3_2 = 0.5 * math.sqrt(3.0)
 
 
@@ -157,7 +189,7 @@ def _start(surface: Surface, E, V, local_chart: bool, unwrap: bool = True) -> tu
 
 
 # ---------------------------------------------------------------------------------------- document solver
-def third_point(a: np.ndarray, b: np.ndarray, min_edge: float = 0.02) -> tuple[np.ndarray, np.ndarray]:
+def third_point(a: np.ndarray, b: np.ndarray, min_edge: float = SETTINGS.min_edge) -> tuple[np.ndarray, np.ndarray]:
     """B (possibly moved) and C making an equilateral triangle on AB in (u, v), (N, 2) each.
 
     ``C = (A + B)/2 + (√3/2) R₉₀ (B − A)``: the least flat triangle on AB, on the left of A → B. When
@@ -214,8 +246,8 @@ def solve_document(
     E,
     V,
     iterations: int = 5,
-    tol: float = 1e-5,
-    min_size: float = 1e-10,
+    tol: float = SETTINGS.tol,
+    min_size: float = SETTINGS.min_size,
     local_chart: bool = False,
     unwrap: bool = True,
     singular: str = "stop",
@@ -273,7 +305,7 @@ def _clamp_length(step: np.ndarray, max_length) -> np.ndarray:
 
 
 def initial_guess(
-    surface: Surface, chart: Chart, O: np.ndarray, E, V, mode: str = "bisector", max_angle: float = 0.1
+    surface: Surface, chart: Chart, O: np.ndarray, E, V, mode: str = "bisector", max_angle: float = SETTINGS.guess_angle
 ) -> np.ndarray:
     """Starting chart coordinates (N, 2).
 
@@ -341,13 +373,13 @@ def solve_robust(
     E,
     V,
     iterations: int = 8,
-    tol: float = 1e-5,
-    max_angle: float = 0.5,
-    max_step: float = 0.25,
+    tol: float = SETTINGS.tol,
+    max_angle: float = SETTINGS.max_angle,
+    max_step: float = SETTINGS.max_step,
     guess: str = "tangent_plane",
     local_chart: bool = True,
     trust_region: bool = True,
-    accept_ratio: float = 4.0,
+    accept_ratio: float = SETTINGS.accept,
     history: bool = False,
 ) -> ReflectionResult:
     """Newton on ∇d = 0 with the analytic Hessian, in the surface's local chart, inside a trust region.

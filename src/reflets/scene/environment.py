@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..equirect import equirect_direction, equirect_uv, rotation_y
 from ..errors import ImageError, SceneError
 from .model import EnvironmentLight, Scene
 
@@ -23,19 +24,6 @@ def load_environment(scene: Scene) -> np.ndarray | None:
     if not np.all(np.isfinite(image)) or np.any(image < 0):
         raise SceneError("environment image has negative or non-finite pixels", file=scene.resolve(light.file))
     return (image * np.float32(light.scale)).astype(np.float32)
-
-
-def rotation_y(degrees: float) -> np.ndarray:
-    """3×3 rotation about +y (right-handed)."""
-    a = np.radians(degrees)
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-def equirect_direction(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Inverse of the Mitsuba-3 mapping u = atan2(x, −z)/2π, v = acos(y)/π (environment's own frame)."""
-    phi, theta = np.broadcast_arrays(2.0 * np.pi * np.asarray(u, dtype=np.float64), np.pi * np.asarray(v))
-    return np.stack([np.sin(theta) * np.sin(phi), np.cos(theta), -np.sin(theta) * np.cos(phi)], axis=-1)
 
 
 def environment_grid(image: np.ndarray, light: EnvironmentLight, grid: tuple[int, int] = (32, 16)):
@@ -64,12 +52,6 @@ def environment_grid(image: np.ndarray, light: EnvironmentLight, grid: tuple[int
     centroid /= np.maximum(np.linalg.norm(centroid, axis=-1, keepdims=True), 1e-30)
     world = centroid.reshape(-1, 3) @ rotation_y(light.rotate_y).T
     return world.astype(np.float32), power.reshape(-1, 3).astype(np.float32)
-
-
-def equirect_uv(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(u, v) of directions in the environment's frame (Mitsuba 3 layout; same as ``equirect_uv`` in GLSL)."""
-    u = np.arctan2(d[..., 0], -d[..., 2]) / (2.0 * np.pi)
-    return u - np.floor(u), np.arccos(np.clip(d[..., 1], -1.0, 1.0)) / np.pi
 
 
 def lookup(image: np.ndarray, light: EnvironmentLight, world_dirs: np.ndarray) -> np.ndarray:

@@ -15,13 +15,15 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..gpu import ProgramSpec, get_context, get_program, set_uniforms
+from ..gpu.programs import shared_constants
 from .profiles import Profile
-from .tracer2d import MAX_BOUNCES, THETAS, FresnelSpec, Tallies
+from .tracer2d import FRESNEL_MODELS, MAX_BOUNCES, PROFILE_KINDS, THETAS, FresnelSpec, Tallies
 
 SCRATCH_PROGRAM = ProgramSpec(
     "scratch_trace",
     compute="reflets/scratches/shaders/scratch_trace.comp",
     flags=frozenset({"M_BINS", "LOCAL_SIZE", "PROFILE_KIND", "FRESNEL_MODEL", "MAX_BOUNCES"}),
+    constants=shared_constants(FRESNEL=FRESNEL_MODELS, PROFILE=PROFILE_KINDS),
 )
 LOCAL_SIZE = 64
 SLOTS = 7
@@ -67,7 +69,7 @@ def trace_table_gpu(
         SCRATCH_PROGRAM,
         M_BINS=M,
         LOCAL_SIZE=LOCAL_SIZE,
-        PROFILE_KIND=1 if profile.kind == "quartic" else 0,
+        PROFILE_KIND=PROFILE_KINDS["quartic" if profile.kind == "quartic" else "polyline"],
         FRESNEL_MODEL=fresnel.model_id,
         MAX_BOUNCES=int(max_bounces),
     )

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..brdf.base import Material
-from ..scene.environment import equirect_uv, rotation_y
+from ..equirect import equirect_uv, rotation_y
 from .profiles import Profile, parse_profile
 from .tracer2d import FresnelSpec
 from .tracer3d import trace_directions

@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..brdf.fresnel import fresnel_conductor, fresnel_dielectric, fresnel_schlick
 from ..errors import ArgumentError
+from ..fresnel import fresnel_conductor, fresnel_dielectric, fresnel_schlick
 from .profiles import Profile, quartic_height, quartic_slope
 
 MAX_BOUNCES = 256  # whispering-gallery paths along a concave quartic reach ~70 at 256² × 10⁴
@@ -42,6 +42,12 @@ _CHUNK = 1 << 17
 
 
 # -- Fresnel ------------------------------------------------------------------------------------------------
+#: Fresnel models of the scratch walls: the codes of the GPU tracer's FRESNEL_MODEL flag (``FRESNEL_NONE``…)
+FRESNEL_MODELS = {"none": 0, "schlick": 1, "dielectric": 2, "lazanyi": 3, "conductor": 4}
+#: profile kinds of the GPU tracer's PROFILE_KIND flag: a polyline (exact segment hits) or the quartic (bisection)
+PROFILE_KINDS = {"polyline": 0, "quartic": 1}
+
+
 @dataclass(frozen=True)
 class FresnelSpec:
     """Fresnel reflectance of the scratch walls, one value per colour channel.
@@ -61,7 +67,7 @@ class FresnelSpec:
 
     @property
     def model_id(self) -> int:
-        return ("none", "schlick", "dielectric", "lazanyi", "conductor").index(self.model)
+        return FRESNEL_MODELS[self.model]
 
     def __call__(self, cos_i) -> np.ndarray:
         """F(cos) with a trailing channel axis: (..., C)."""

@@ -26,9 +26,10 @@ import moderngl
 import numpy as np
 from pydantic import Field
 
+from ..equirect import rotation_y
 from ..errors import ArgumentError
 from ..gpu import FrameTimer, HDRTarget, ProgramSpec, get_program, set_uniforms
-from ..scene.environment import environment_grid, load_environment, rotation_y
+from ..scene.environment import environment_grid, load_environment
 from ..scene.geometry import bounding_sphere, clip_planes_of_sphere, mesh_data
 from ..scene.lightmask import load_masks, mask_lookup, quad_uv
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene

@@ -1,7 +1,7 @@
 """Optics of a smooth dielectric boundary and of the medium inside it (NumPy, float64).
 
 Conventions: ``eta`` is the relative index η = n_inside / n_outside of the translucent material (1.3 for skin,
-1.5 for marble). Fresnel reflectance at an interface uses :func:`reflets.brdf.fresnel.fresnel_dielectric`,
+1.5 for marble). Fresnel reflectance at an interface uses :func:`reflets.fresnel.fresnel_dielectric`,
 whose ``eta`` is n_transmitted / n_incident: ``eta`` for light arriving from outside, ``1/eta`` for light
 arriving from inside (total internal reflection beyond the critical angle).
 
@@ -15,7 +15,7 @@ import functools
 
 import numpy as np
 
-from ..brdf.fresnel import fresnel_dielectric
+from ..fresnel import fresnel_dielectric
 
 __all__ = [
     "fresnel_reflectance",

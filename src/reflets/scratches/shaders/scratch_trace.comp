@@ -4,8 +4,8 @@
 // traced-ray count of every column. One workgroup per (φ_in column, slice); each invocation
 // traces rays r = slice·LOCAL_SIZE + local, + LOCAL_SIZE·slices, … < u_rays, tallies them in shared memory,
 // and the workgroup adds its histogram to the global one with integer atomics.
-// Flags: M_BINS (table size), LOCAL_SIZE, PROFILE_KIND (0 polyline: exact segment hits, 1 quartic: bisection),
-// FRESNEL_MODEL (0 none, 1 Schlick, 2 exact dielectric, 3 Lazányi, 4 exact conductor), MAX_BOUNCES.
+// Flags: M_BINS (table size), LOCAL_SIZE, PROFILE_KIND (PROFILE_POLYLINE: exact segment hits, PROFILE_QUARTIC: bisection),
+// FRESNEL_MODEL (FRESNEL_NONE, _SCHLICK, _DIELECTRIC exact, _LAZANYI, _CONDUCTOR exact; codes from tracer2d.py), MAX_BOUNCES.
 // Output layout (uint): slot s ∈ {0 count, 1..3 RGB weights θ0, 4..6 RGB weights θ1} at [s][φ_out][φ_in],
 // then the lost-ray count of each column at 7·M², the traced-ray count at 7·M² + M. Every tally is fixed point (× u_scale, stochastic rounding)
 // and carries the ray weight cos ψ / c̄_j ≤ 2 (ψ = jittered φ_in, c̄_j = mean of cos over the bin).
@@ -45,16 +45,16 @@ float quartic_dh(float x) {
 }
 
 vec3 wall_fresnel(float c) {
-#if FRESNEL_MODEL == 1
+#if FRESNEL_MODEL == FRESNEL_SCHLICK
     vec3 f0 = (u_eta - 1.0) / (u_eta + 1.0);
     return fresnel_schlick(c, f0 * f0);
-#elif FRESNEL_MODEL == 2
+#elif FRESNEL_MODEL == FRESNEL_DIELECTRIC
     return fresnel_dielectric(c, u_eta);
-#elif FRESNEL_MODEL == 3
+#elif FRESNEL_MODEL == FRESNEL_LAZANYI
     float m = 1.0 - clamp(c, 0.0, 1.0);
     float m5 = m * m * m * m * m;
     return ((u_eta - 1.0) * (u_eta - 1.0) + 4.0 * u_eta * m5 + u_k * u_k) / ((u_eta + 1.0) * (u_eta + 1.0) + u_k * u_k);
-#elif FRESNEL_MODEL == 4
+#elif FRESNEL_MODEL == FRESNEL_CONDUCTOR
     return fresnel_conductor(c, u_eta, u_k);
 #else
     return vec3(1.0);
@@ -86,7 +86,7 @@ int trace(float phi_in, float x0, out vec3 w0, out vec3 w1) {
         float t_floor = dy < 0.0 ? (u_bottom - py) / dy : HUGE;
         float t_lo = 0.0;
         float t_hit = 0.0;
-#if PROFILE_KIND == 1
+#if PROFILE_KIND == PROFILE_QUARTIC
         float g_lo = max(py - quartic_h(px), 0.0);
 #endif
         int status = 0;  // 0 lost, 1 hit, 2 left through the lid
@@ -94,7 +94,7 @@ int trace(float phi_in, float x0, out vec3 w0, out vec3 w1) {
             vec2 a = knots[cell];
             vec2 b = knots[cell + 1];
             float t_out = dx > 0.0 ? (b.x - px) / dx : (dx < 0.0 ? (a.x - px) / dx : HUGE);
-#if PROFILE_KIND == 0
+#if PROFILE_KIND == PROFILE_POLYLINE
             float slope = (b.y - a.y) / (b.x - a.x);
             float g0 = py - a.y - (px - a.x) * slope;
             float den = dy - dx * slope;
@@ -155,7 +155,7 @@ int trace(float phi_in, float x0, out vec3 w0, out vec3 w1) {
             }
         }
         if (status == 0) return -1;
-#if PROFILE_KIND == 1
+#if PROFILE_KIND == PROFILE_QUARTIC
         if (status == 1) {  // bisection on the exact curve; the new origin is the end still above it
             float lo = t_lo;
             float hi = t_hit;
@@ -172,7 +172,7 @@ int trace(float phi_in, float x0, out vec3 w0, out vec3 w1) {
         }
         px += t_hit * dx;
         py += t_hit * dy;
-#if PROFILE_KIND == 0
+#if PROFILE_KIND == PROFILE_POLYLINE
         float s = (knots[cell + 1].y - knots[cell].y) / (knots[cell + 1].x - knots[cell].x);
 #else
         float s = quartic_dh(px);

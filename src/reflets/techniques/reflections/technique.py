@@ -38,6 +38,7 @@ from pydantic import Field
 from ...errors import ArgumentError
 from ...gpu import ProgramSpec, get_program, set_uniforms
 from ...reflections.scene import canonical_surface
+from ...reflections.solver import SOLVERS, SURFACE_KINDS, glsl_constants
 from ...scene.geometry import bounding_sphere, mesh_data
 from ...scene.lightmask import quad_uv
 from ...scene.meshdata import MeshData
@@ -55,6 +56,7 @@ REFLECTED_PROGRAM = ProgramSpec(
     vertex=SHADERS + "reflected.vert",
     fragment=SHADERS + "reflected.frag",
     flags=LIGHT_FLAGS | SOLVER_FLAGS | {"REFLECTED_EMITTER", "EMITTER_MASK"},
+    constants=glsl_constants(),
 )
 COMPOSITE_PROGRAM = ProgramSpec(
     "fermat_composite",
@@ -66,11 +68,10 @@ POINTS_PROGRAM = ProgramSpec(
     "fermat_points",
     vertex=SHADERS + "points.vert",
     flags=SOLVER_FLAGS,
+    constants=glsl_constants(),
     varyings=("t_position", "t_normal", "t_valid", "t_residual", "t_iterations"),
 )
 #: SURFACE_KIND values of solver.glsl
-SURFACE_KINDS = {"sphere": 1, "torus": 2, "cylinder": 3, "plane": 4, "sampled": 5}
-SOLVERS = {"robust": 0, "document": 1}
 DEFAULT_ITERATIONS = {"robust": 8, "document": 5}
 #: texture units of the G-buffer and reflection images (materials use 1…, the environment 0)
 GBUFFER_UNITS = (12, 13, 14)
@@ -399,7 +400,7 @@ class Fermat(Forward):
             }
             color = self.scene.background_color()
             if color is None:
-                from ...scene.environment import rotation_y
+                from ...equirect import rotation_y
 
                 self._env_texture.use(0)
                 uniforms["u_env"] = 0

@@ -27,9 +27,10 @@ import moderngl
 import numpy as np
 from pydantic import Field
 
+from ...equirect import rotation_y
 from ...errors import ArgumentError
 from ...gpu import ProgramSpec
-from ...scene.environment import load_environment, rotation_y
+from ...scene.environment import load_environment
 from ...scratches.material import Scratched
 from ..base import register_technique
 from ..forward import LIGHT_FLAGS, Forward, ForwardParams

@@ -50,6 +50,7 @@ from pydantic import Field, field_validator
 from ...brdf.translucent import Translucent
 from ...errors import ArgumentError
 from ...gpu import ProgramSpec, get_program, set_uniforms
+from ...gpu.programs import shared_constants
 from ...scene.geometry import bounding_sphere, mesh_data
 from ...scene.model import DirectionalLight, PointLight, Scene
 from ...scene.transform import look_at, perspective
@@ -88,6 +89,7 @@ TRANSLUCENT_PROGRAM = ProgramSpec(
         }
     )
     | LIGHT_FLAGS,
+    constants=shared_constants(PROFILE={name: code for code, name in enumerate(PROFILES)}),
 )
 TERM_BITS = {"specular": 1, "single": 2, "multiple": 4, "transmission": 8}
 REFRACTION_MODES = {"off": 0, "on": 1, "exit": 2}

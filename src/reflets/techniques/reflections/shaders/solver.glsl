@@ -2,8 +2,8 @@
 // the stationary point of d(u, v) = |E − f| + |V − f| (Fermat). GLSL twin of reflets/reflections/solver.py
 // (solve_robust, solve_document) on the surfaces of reflets/scene/surfaces.py; the tests compare them.
 //
-// Flags: SURFACE_KIND (1 sphere, 2 torus, 3 open cylinder, 4 plane, 5 sampled into a texture), SOLVER (0 robust: safeguarded Newton with
-// the analytic Hessian in a local chart; 1 document: the triangle secant of §3.3), ITERATIONS, COUNT_ITERATIONS
+// Flags: SURFACE_KIND (SURFACE_SPHERE, _TORUS, _CYLINDER (open), _PLANE, _SAMPLED into a texture), SOLVER (SOLVER_ROBUST: safeguarded Newton with
+// the analytic Hessian in a local chart; SOLVER_DOCUMENT: the triangle secant of §3.3), ITERATIONS, COUNT_ITERATIONS
 // (1: record after how many iterations the residual fell below FERMAT_TOL — a residual per iteration, so only
 // the read-back program pays for it).
 // The reflector is a canonical shape (parameters r_params) under the mesh transform x → A x + t (r_linear,
@@ -14,13 +14,8 @@ uniform mat3 r_inverse;  // A⁻¹ (normals map by its transpose)
 uniform vec3 r_offset;   // t
 uniform vec4 r_params;   // sphere (radius); torus (major, minor); cylinder (radius, height); plane (size x, size z)
 
-const float FERMAT_TOL = 1e-4;        // residual below which a point has converged (float32: 1e-5 is at rounding level)
-const float FERMAT_MAX_ANGLE = 0.5;   // robust: initial trust region, radians the normal may turn along a step
-const float FERMAT_MAX_STEP = 0.25;   // robust: initial trust region in chart units (bounds steps on flat parts)
-const float FERMAT_GUESS_ANGLE = 0.1; // robust: the tangent-plane guess moves the normal by at most this
-const float FERMAT_ACCEPT = 4.0;      // robust: a step may multiply |∇d|² by at most this
-const float FERMAT_MIN_EDGE = 0.02;   // document: the initial triangle's smallest edge
-const float FERMAT_MIN_SIZE = 1e-10;  // document: stop when the triangle is smaller
+// FERMAT_TOL, FERMAT_MAX_ANGLE, FERMAT_MAX_STEP, FERMAT_GUESS_ANGLE, FERMAT_ACCEPT, FERMAT_MIN_EDGE, FERMAT_MIN_SIZE,
+// SURFACE_* and SOLVER_* are #defines from reflets.reflections.solver (SolverSettings, glsl_constants).
 
 struct FermatResult {
     vec3 position;
@@ -44,7 +39,7 @@ vec2 near_middle(vec2 x, vec2 a, vec2 b, bvec2 periodic) {
     return vec2(periodic.x ? x.x - floor(x.x - m.x + 0.5) : x.x, periodic.y ? x.y - floor(x.y - m.y + 0.5) : x.y);
 }
 
-#if SURFACE_KIND == 1
+#if SURFACE_KIND == SURFACE_SPHERE
 // Sphere of radius r_params.x. Robust: the lat-long chart whose equator is the great circle through A and B
 // (SphereChart: the reflection lies on it for a sphere — no pole, no seam). Document: the global chart about +y.
 mat3 g_frame;
@@ -66,7 +61,7 @@ vec3 surface_interior(vec3 E, vec3 V) { return vec3(0.0); }
 vec2 surface_hit(vec3 P, vec3 O) { return sphere_coordinates(GLOBAL_FRAME, normalize(P - O)); }  // O: the centre
 
 void chart_setup(vec2 a_uv, vec2 b_uv, out vec2 a, out vec2 b) {
-#if SOLVER == 0
+#if SOLVER == SOLVER_ROBUST
     vec3 da = sphere_direction(GLOBAL_FRAME, a_uv), db = sphere_direction(GLOBAL_FRAME, b_uv);
     vec3 w = db - dot(db, da) * da;
     if (length(w) <= 1e-12) {  // A = ±B: any normal to Â
@@ -106,7 +101,7 @@ void chart_eval(vec2 x, out vec3 f, out vec3 fu, out vec3 fv, out vec3 fuu, out 
 
 vec3 chart_normal(vec2 x, vec3 f, vec3 fu, vec3 fv) { return f; }  // outward, defined at the poles too
 
-#elif SURFACE_KIND == 2
+#elif SURFACE_KIND == SURFACE_TORUS
 // Ring torus about y, major R = r_params.x, minor r = r_params.y: both directions periodic and regular, the
 // global chart with B unwrapped next to A. O: the core circle's point at the azimuth of the E, V midpoint.
 float torus_implicit(vec3 q) {
@@ -175,7 +170,7 @@ void chart_eval(vec2 x, out vec3 f, out vec3 fu, out vec3 fv, out vec3 fuu, out 
 
 vec3 chart_normal(vec2 x, vec3 f, vec3 fu, vec3 fv) { return cross(fu, fv); }
 
-#elif SURFACE_KIND == 3
+#elif SURFACE_KIND == SURFACE_CYLINDER
 // Side of a cylinder along y, radius r_params.x, height r_params.y: (r sinφ, h/2 − h v, r cosφ), u periodic.
 // O: on the axis at the E, V mean height (clamped to the cylinder).
 vec2 cylinder_uv(vec3 q) {
@@ -220,7 +215,7 @@ void chart_eval(vec2 x, out vec3 f, out vec3 fu, out vec3 fv, out vec3 fuu, out 
 
 vec3 chart_normal(vec2 x, vec3 f, vec3 fu, vec3 fv) { return -cross(fu, fv); }
 
-#elif SURFACE_KIND == 4
+#elif SURFACE_KIND == SURFACE_PLANE
 // Rectangle in y = 0 of size (r_params.x, r_params.y), normal +y: f = ((u − ½) s_x, 0, −(v − ½) s_z), as
 // Plane(point 0, axis_u (s_x, 0, 0), axis_v (0, 0, −s_z)). O: below the plane.
 vec3 surface_interior(vec3 E, vec3 V) { return vec3(0.0, -(r_params.x + r_params.y), 0.0); }
@@ -250,7 +245,7 @@ void chart_eval(vec2 x, out vec3 f, out vec3 fu, out vec3 fv, out vec3 fuu, out 
 }
 
 vec3 chart_normal(vec2 x, vec3 f, vec3 fu, vec3 fv) { return vec3(0.0, 1.0, 0.0); }
-#elif SURFACE_KIND == 5
+#elif SURFACE_KIND == SURFACE_SAMPLED
 // A reflector sampled into a float texture (surfaces.SampledSurface, bicubic): node grid padded with one ghost
 // node before and two after (wrapped, or linearly extrapolated on clamped edges), Catmull–Rom on the 4×4
 // stencil, so f is C1 and the Fermat gradient continuous (GridInterpolator). Any analytic reflector can be
@@ -444,7 +439,7 @@ void fermat_start(vec3 E, vec3 V, out vec2 a, out vec2 b, out vec3 O_canonical) 
     chart_setup(surface_hit(Vc, O_canonical), surface_hit(Ec, O_canonical), a, b);
 }
 
-#if SOLVER == 0
+#if SOLVER == SOLVER_ROBUST
 // Angle the normal turns along a chart step (normal curvature × 3D length), to first order (solver._turn).
 float normal_turn(vec2 s, ChartPoint p) {
     float len = length(p.fu * s.x + p.fv * s.y);

@@ -1,8 +1,8 @@
 // Provides profile_rd(r): the diffusion profile R_d at distance r (mm), per RGB channel, and its cumulative
 // profile_cumulative(x) = ∫₀^x R_d(u) u du — twin of
-// reflets/translucency/profiles.py (constants p_* from profiles.glsl_uniforms). PROFILE: 0 dipole,
-// 1 better dipole, 2 normalised diffusion.
-#if PROFILE == 2
+// reflets/translucency/profiles.py (constants p_* from profiles.glsl_uniforms). PROFILE: PROFILE_DIPOLE,
+// PROFILE_BETTER_DIPOLE or PROFILE_NORMALIZED_DIFFUSION (codes from profiles.PROFILES).
+#if PROFILE == PROFILE_NORMALIZED_DIFFUSION
 uniform vec3 p_A;
 uniform vec3 p_s;
 vec3 profile_rd(float r) {
