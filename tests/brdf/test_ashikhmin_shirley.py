@@ -50,6 +50,7 @@ def test_ashikhmin_shirley_glsl_matches_numpy(ctx, rng, params):
     check_glsl_parity(AshikhminShirley(**params), ctx, rng)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("params", CASES, ids=case_id)
 def test_ashikhmin_shirley_standard_checks(rng, params):
     run_standard_checks(AshikhminShirley(**params), rng)

@@ -54,6 +54,7 @@ def test_lafortune_glsl_matches_numpy(ctx, rng, params):
     check_glsl_parity(Lafortune(**params), ctx, rng)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("params", CASES, ids=case_id)
 def test_lafortune_standard_checks(rng, params):
     run_standard_checks(Lafortune(**params), rng)

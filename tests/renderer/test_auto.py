@@ -149,6 +149,7 @@ def _showcase_parts(size):
     return scene, full, alone, visible
 
 
+@pytest.mark.slow
 def test_showcase_objects_equal_their_own_technique(ctx):
     """The showcase's bunny (ltc), plate (scratches) and marble (translucent: its point light through the
     light view, the quad light and sky through its far-field BRDF) equal renders of each alone."""

@@ -60,6 +60,7 @@ def test_build_table_gpu_backend(ctx):
     assert table.lost.sum() <= 1e-4 * M * 2000
 
 
+@pytest.mark.slow
 def test_gpu_traces_every_ray_of_long_columns(ctx):
     """llvmpipe silently ends an invocation after 65,535 loop iterations: with one slice per column (≈ 600 rays
     per invocation here) rays went missing; the tracer must notice (traced-ray count), spread and retry."""

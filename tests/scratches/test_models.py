@@ -51,6 +51,7 @@ def _rel_errors(model, spec, fresnel, frame, sky):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("spec", ["vgroove:0.5", "quartic:0.5"])
 def test_full_model_matches_reference_at_several_elevations(spec, sky):
     """Outgoing radiance of ω_o = (θ, φ) under the sky, 6 φ per θ. Tolerance: 4σ plus a bias allowance of 0.8 %
@@ -66,6 +67,7 @@ def test_full_model_matches_reference_at_several_elevations(spec, sky):
     assert worst > 0.05
 
 
+@pytest.mark.slow
 def test_gamma_blend_cannot_follow_the_exact_conductor_dip(sky):
     """Exact iron Fresnel dips below F(0) (0.531 → 0.508 at cos 0.3) before rising: the power law
     F_γ ∈ [0, 1] blends ρ_s(0) towards ρ_m and cannot go below ρ_s(0), so at θ = π/3 the full model is
@@ -86,6 +88,7 @@ def plate():
     return view, light, ref
 
 
+@pytest.mark.slow
 def test_full_model_beats_the_other_models_on_a_brushed_plate(plate):
     """Quartic:0.5 iron plate under the sky and a 4° sun (measured relMSE / FLIP: full 0.005 / 0.024,
     1-bounce 0.054 / 0.19, NDF 0.059 / 0.24, AS00 0.46 / 0.34)."""
@@ -105,6 +108,7 @@ def test_full_model_beats_the_other_models_on_a_brushed_plate(plate):
     assert errors["full"][0] < 0.02
 
 
+@pytest.mark.slow
 def test_linear_mixing_reproduces_the_area_average(plate):
     """Eq. 3.4 with one layer: α L_s + (1 − α) L_b against the reference that averages scratch geometry and flat
     base by area (coverage rising 0 → 1 across the image); c² instead of c is rejected."""

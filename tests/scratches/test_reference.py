@@ -61,6 +61,7 @@ def test_lossless_white_furnace(spec):
     assert np.all(iron.mean < 0.9) and np.all(iron.mean > 0.1)
 
 
+@pytest.mark.slow
 def test_standard_error_is_conservative_on_aggregate():
     """Against a 16× denser image, the RMS error is at most ~1.5 × the RMS reported standard error."""
     view = PlateView(24, 16)

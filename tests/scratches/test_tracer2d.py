@@ -116,6 +116,7 @@ def antitranspose(b, j):
     return M - 1 - j, M - 1 - b
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("profile", ["vgroove:0.7", "quartic:0.8", ASYM], ids=["vgroove", "quartic", "asym"])
 def test_reciprocity_within_noise_and_shrinking_with_n(profile):
     p = parse_profile(profile)
@@ -131,6 +132,7 @@ def test_reciprocity_within_noise_and_shrinking_with_n(profile):
     assert _pair_stat(t, transpose, factor=np.cos(phi)[:, None] / np.cos(phi)[None, :])[0] < 1e-6
 
 
+@pytest.mark.slow
 def test_antidiagonal_symmetry_of_symmetric_profiles_only():
     for spec in ("vgroove:0.866", "quartic:0.8"):
         errors = []

@@ -63,6 +63,7 @@ def t2_phi():
     return -0.5 * np.pi + (np.arange(M) + 0.5) * np.pi / M
 
 
+@pytest.mark.slow
 def test_gamma_model_against_3d():
     """The table's power-law blend (eq. 3.2) where it is a fit, against the 3D ground truth (column energies).
 

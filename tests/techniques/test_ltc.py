@@ -277,6 +277,7 @@ def test_ggx_fit_error_is_small():
 # ------------------------------------------------------------------------------ images
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("material", "threshold"),
     [
@@ -304,6 +305,7 @@ def test_benchmark_scene_matches_unoccluded_reference(ctx, material, threshold):
     assert error < threshold, f"relative MSE {error:.4f} (reference noise {noise:.1e})"
 
 
+@pytest.mark.slow
 def test_sphere_horizon_is_exact_without_clipping_and_close_with_it(ctx):
     """horizon = "sphere" (production engines' approximation) equals exact clipping where the transformed
     polygon stays above the horizon (the identity transform of a Lambert plane under a light) and stays within
@@ -394,12 +396,13 @@ def test_materials_choose_shipped_tables_or_a_fitted_one(tmp_path, monkeypatch):
     fitted = choose(Microfacet(alpha=0.3, fresnel="schlick", specular=(0.04, 0.04, 0.04)))
     assert fitted.source == "material" and fitted.table.size == (ltc_module.INSTANCE_SIZE, 1)
     assert len(list((tmp_path / "reflets" / "ltc").glob("*.npz"))) == 1
-    ltc_module._MEMORY.clear()  # a new process: read back from disk, no refit
+    ltc_module.TABLES.clear_memory()  # a new process: read back from disk, no refit
     monkeypatch.setattr(ltc_fit, "fit_material", lambda *a, **k: pytest.fail("refitted a cached table"))
     again = choose(Microfacet(alpha=0.3, fresnel="schlick", specular=(0.04, 0.04, 0.04)))
     np.testing.assert_array_equal(again.table.minv, fitted.table.minv)
 
 
+@pytest.mark.slow
 def test_coloured_conductor_fitted_at_prepare_matches_reference(ctx, tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     scene = bench_scene({"type": "microfacet", "alpha": 0.3, "fresnel": "conductor"})

@@ -179,6 +179,7 @@ def glossy_rmse(images, truth, stderr, mask) -> float:
     return float(np.sqrt(max(mse, 0.0)))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("strategy", STRATEGIES)
 def test_glossy_phong_mean_over_seeds_matches_reference(ctx, glossy, strategy):
     scene, truth, stderr, mask, lit = glossy

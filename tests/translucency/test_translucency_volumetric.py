@@ -23,6 +23,7 @@ def sphere_scene(eta=1.0, lights=None):
     )
 
 
+@pytest.mark.slow
 def test_default_technique_within_5_percent_relative_mse_of_volumetric_path_tracing():
     scene = sphere_scene()
     ref = render_volumetric(scene, spp=32, seed=1, progress=False)
@@ -48,6 +49,7 @@ def test_volumetric_reference_is_deterministic_and_rejects_what_it_cannot_render
         render_volumetric(sphere_scene(lights=two), spp=1, progress=False)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("eta", [1.0, 1.3])
 def test_worker_processes_draw_an_equivalent_reproducible_reference(eta):
     """Samples split over two processes: the same seed gives the same image, and it agrees with the one-process
@@ -113,6 +115,7 @@ def test_single_scattering_through_a_refracting_boundary_matches_hanrahan_kruege
     assert np.all(np.abs(mean - expected) < 3 * sigma + 0.005 * expected), (mean, expected, sigma)
 
 
+@pytest.mark.slow
 def test_refracting_walk_reduces_to_the_index_matched_one_at_eta_1():
     """All orders on the index-matched sphere: the refracting walk (manifold connection, Fresnel at every
     crossing) forced at η = 1 agrees with the straight shadow-ray walk within their noise."""
@@ -128,6 +131,7 @@ def test_refracting_walk_reduces_to_the_index_matched_one_at_eta_1():
     assert np.all(np.abs(mean_b - mean_a) < 3 * sigma + 0.005 * mean_a), (mean_a, mean_b, sigma)
 
 
+@pytest.mark.slow
 def test_refracting_boundary_keeps_light_inside_by_total_internal_reflection():
     """The same sphere at η = 1.3 renders (no longer refused) and differs from η = 1 beyond noise: less light
     enters and leaves (Fresnel), paths are trapped longer (total internal reflection)."""

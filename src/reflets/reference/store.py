@@ -8,7 +8,6 @@ Monte Carlo noise), with the fingerprint's inputs written out so that a reader c
 
 from __future__ import annotations
 
-import hashlib
 import io
 import json
 import time
@@ -17,12 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cache import content_key, file_digest
+
 #: bump when the volumetric reference's algorithm changes what it converges to or how it samples
 REFERENCE_VERSION = "volumetric-1"
-
-
-def _file_digest(path: str) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def fingerprint(scene, **params) -> tuple[str, dict]:
@@ -30,10 +27,9 @@ def fingerprint(scene, **params) -> tuple[str, dict]:
     description = scene.model_dump(mode="json")
     for mesh in description.get("mesh", []):
         if mesh.get("file"):
-            mesh["file"] = {"name": Path(mesh["file"]).name, "sha256": _file_digest(mesh["file"])}
+            mesh["file"] = {"name": Path(mesh["file"]).name, "sha256": file_digest(mesh["file"])}
     description = {"scene": description, "version": REFERENCE_VERSION, **params}
-    text = json.dumps(description, sort_keys=True)
-    return hashlib.sha256(text.encode()).hexdigest()[:16], description
+    return content_key(description, length=16), description
 
 
 def save(path: Path, image, digest: str, description: dict, seconds: float) -> None:

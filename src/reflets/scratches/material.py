@@ -37,10 +37,6 @@ Tables and α maps are cached in memory and on disk under ``$XDG_CACHE_HOME/refl
 from __future__ import annotations
 
 import functools
-import hashlib
-import json
-import os
-import zipfile
 from pathlib import Path
 from typing import Annotated, ClassVar, Literal, Union
 
@@ -56,6 +52,7 @@ from ..brdf.measured import Measured
 from ..brdf.microfacet import Microfacet
 from ..brdf.phong import Phong
 from ..brdf.ward import Ward
+from ..cache import Cache, content_key, file_stamp, source_hash
 from ..errors import RefletsError
 
 #: Table 3.1 of the document: (layers N, spread Θ in degrees, length l, width w, density d)
@@ -283,74 +280,41 @@ class Scratched(Material):
 
 
 # ---------------------------------------------------------------------------------------------- caches
-_TABLES: dict[str, object] = {}
-_ALPHAS: dict[str, np.ndarray] = {}
+def _load_table(path: Path):
+    from .table import load_table
+
+    return load_table(path)
 
 
-def cache_dir() -> Path:
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "reflets" / "scratches"
+def _load_alpha(path: Path) -> np.ndarray:
+    with np.load(path) as data:
+        return data["alpha"]
+
+
+TABLES = Cache("scratches", _load_table, lambda table, path: table.save(path))
+ALPHAS = Cache("scratches", _load_alpha, lambda maps, path: np.savez_compressed(path, alpha=maps))
 
 
 @functools.cache
 def _code_hash(*modules: str) -> str:
     """Hash of the source files a cached result depends on (a changed tracer recomputes)."""
     here = Path(__file__).parent
-    h = hashlib.sha256()
-    for name in modules:
-        h.update((here / name).read_bytes())
-    return h.hexdigest()[:16]
-
-
-def _key(data: dict) -> str:
-    return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()[:32]
-
-
-def _profile_stamp(spec: str) -> list | None:
-    if not spec.startswith("file:"):
-        return None
-    try:
-        st = Path(spec[5:]).expanduser().stat()
-        return [st.st_size, st.st_mtime_ns]
-    except OSError:
-        return None
+    return source_hash(*(here / name for name in modules))
 
 
 def table_key(profile: str, fresnel: dict, size: int, rays: int, backend: str) -> str:
     code = _code_hash("table.py", "tracer2d.py", "profiles.py", "gpu.py", "shaders/scratch_trace.comp")
-    data = {"profile": profile, "stamp": _profile_stamp(profile), "fresnel": fresnel, "size": size}
-    return "table-" + _key({**data, "rays": rays, "backend": backend, "code": code})
+    stamp = file_stamp(profile[5:]) if profile.startswith("file:") else None
+    data = {"profile": profile, "stamp": stamp, "fresnel": fresnel, "size": size}
+    return "table-" + content_key({**data, "rays": rays, "backend": backend, "code": code})
 
 
 def cached_table(profile: str, fresnel: dict, size: int, rays: int, backend: str, ctx=None):
     """A scratch table from the memory cache, the disk cache, or :func:`build_table` (then stored in both)."""
-    from .table import build_table, load_table
+    from .table import build_table
 
     key = table_key(profile, fresnel, size, rays, backend)
-    if key in _TABLES:
-        return _TABLES[key]
-    path = cache_dir() / f"{key}.npz"
-    table = None
-    if path.is_file():
-        try:
-            table = load_table(path)
-        except (OSError, ValueError, KeyError, zipfile.BadZipFile, RefletsError):
-            table = None  # a broken cache entry is recomputed
-    if table is None:
-        table = build_table(profile, **fresnel, size=size, rays=rays, backend=backend, ctx=ctx)
-        _store(path, table.save)
-    _TABLES[key] = table
-    return table
-
-
-def _store(path: Path, save) -> None:
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")
-        save(tmp)
-        tmp.replace(path)
-    except OSError:
-        pass  # a read-only cache only costs the recomputation next time
+    return TABLES.get(key, lambda: build_table(profile, **fresnel, size=size, rays=rays, backend=backend, ctx=ctx))
 
 
 def alpha_key(material: Scratched) -> str:
@@ -362,28 +326,13 @@ def alpha_key(material: Scratched) -> str:
         "budget": SPLAT_BUDGET,
         "code": _code_hash("material.py"),
     }
-    return "alpha-" + _key(data)
+    return "alpha-" + content_key(data)
 
 
 def cached_alpha(material: Scratched) -> np.ndarray:
     if material.coverage is not None:
         return np.full((material.layer_count, 1, 1), material.coverage, np.float32)
-    key = alpha_key(material)
-    if key in _ALPHAS:
-        return _ALPHAS[key]
-    path = cache_dir() / f"{key}.npz"
-    maps = None
-    if path.is_file():
-        try:
-            with np.load(path) as data:
-                maps = data["alpha"]
-        except (OSError, ValueError, KeyError, zipfile.BadZipFile):
-            maps = None
-    if maps is None:
-        maps = bake_alpha(material)
-        _store(path, lambda p: np.savez_compressed(p, alpha=maps))
-    _ALPHAS[key] = maps
-    return maps
+    return ALPHAS.get(alpha_key(material), lambda: bake_alpha(material))
 
 
 # ---------------------------------------------------------------------------------------------- α maps

@@ -51,10 +51,6 @@ exact where the transformed polygon stays above the horizon; accuracy in the sam
 from __future__ import annotations
 
 import functools
-import hashlib
-import json
-import os
-import zipfile
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -64,7 +60,7 @@ import moderngl
 import numpy as np
 from pydantic import Field
 
-from ...errors import RefletsError
+from ...cache import Cache, content_key, file_stamp, source_hash
 from ...gpu import ProgramSpec
 from ..base import register_technique
 from . import ltc_fit
@@ -150,17 +146,12 @@ def choose_table(material) -> LtcChoice:
 # ------------------------------------------------------------------------------ one-material tables
 
 
-_MEMORY: dict[str, LtcTable] = {}
-
-
-def cache_dir() -> Path:
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "reflets" / "ltc"
+TABLES = Cache("ltc", LtcTable.load, lambda table, path: table.save(path))
 
 
 @functools.cache
 def _fitter_hash() -> str:
-    return hashlib.sha256(Path(ltc_fit.__file__).read_bytes()).hexdigest()
+    return source_hash(Path(ltc_fit.__file__))
 
 
 def material_key(material, n_theta: int = INSTANCE_SIZE) -> str:
@@ -173,37 +164,13 @@ def material_key(material, n_theta: int = INSTANCE_SIZE) -> str:
         "settings": ltc_fit.FitSettings().__dict__,
     }
     if material.type == "measured":
-        try:
-            st = Path(material.file).stat()
-            data["file_stat"] = [st.st_size, st.st_mtime_ns]
-        except OSError:
-            pass
-    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:32]
+        data["file_stat"] = file_stamp(material.file)
+    return content_key(data)
 
 
 def fitted_table(material, n_theta: int = INSTANCE_SIZE) -> LtcTable:
     """The one-material table of ``material`` (memory cache, then disk cache, then a fit)."""
-    key = material_key(material, n_theta)
-    if key in _MEMORY:
-        return _MEMORY[key]
-    path = cache_dir() / f"{key}.npz"
-    table = None
-    if path.is_file():
-        try:
-            table = LtcTable.load(path)
-        except (OSError, ValueError, KeyError, zipfile.BadZipFile, RefletsError):
-            table = None  # a stale or broken cache entry is refitted
-    if table is None:
-        table = ltc_fit.fit_material(material, n_theta)
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")
-            table.save(tmp)
-            tmp.replace(path)
-        except OSError:
-            pass  # a read-only cache only costs the refit next time
-    _MEMORY[key] = table
-    return table
+    return TABLES.get(material_key(material, n_theta), lambda: ltc_fit.fit_material(material, n_theta))
 
 
 # ------------------------------------------------------------------------------ the technique
