@@ -9,6 +9,7 @@
 >>> truth = reflets.reference(scene, spp=256) # NumPy Monte Carlo: .image, .stderr
 """
 
+from . import materials  # noqa: F401  (first: completes the scene model with every material type)
 from .api import compare, render
 from .errors import RefletsError
 from .reference import reference  # the function; the subpackage stays importable as reflets.reference.*

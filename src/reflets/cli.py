@@ -197,7 +197,7 @@ def cmd_demo(args) -> int:
 
 
 def cmd_fit_ltc(args) -> int:
-    from .techniques.arealights.ltc_fit import fit_ltc
+    from .arealights.ltc_fit import fit_ltc
 
     out = Path(args.output)
     if out.suffix != ".npz":

@@ -9,8 +9,8 @@ from pydantic import ValidationError
 
 import reflets
 from reflets.brdf.base import MATERIALS
-from reflets.brdf.translucent import Translucent
 from reflets.translucency import PRESETS
+from reflets.translucency.material import Translucent
 
 CASES = [
     dict(preset="skin1"),

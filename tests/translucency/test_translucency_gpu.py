@@ -8,8 +8,7 @@ import pytest
 import reflets
 from reflets.errors import ArgumentError
 from reflets.scene.model import DirectionalLight, PointLight
-from reflets.techniques.translucency import rings
-from reflets.translucency import Medium, half_space_single_scattering, profile_rd, total_reflectance
+from reflets.translucency import Medium, half_space_single_scattering, profile_rd, rings, total_reflectance
 from reflets.translucency.optics import fresnel_moment, fresnel_transmittance
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import platform
@@ -10,18 +11,26 @@ from pathlib import Path
 
 from ..errors import ArgumentError, OutputError
 
-#: suite name → function(quick: bool, out_dir: Path) -> (results dict, markdown text); it may write more files
-SUITES: dict[str, Callable[[bool, Path], tuple[dict, str]]] = {}
+#: suite name → "module:function"; the function(quick: bool, out_dir: Path) returns (results dict, markdown
+#: text) and may write more files. The suites sit above the techniques and the references they compare (a
+#: technique's package holds its model and its passes; its benchmark needs the reference too, which itself uses
+#: the technique's NumPy model: one layer up keeps the imports acyclic); imported only when they run.
+SUITES: dict[str, str] = {
+    "reference": "reflets.bench.reference:bench_reference",
+    "arealights": "reflets.bench.arealights:bench_arealights",
+    "ltc-cost": "reflets.bench.arealights:bench_ltc_cost",
+    "translucency": "reflets.bench.translucency:bench_translucency",
+    "reflections": "reflets.bench.reflections:bench_reflections",
+    "scratches": "reflets.bench.scratches:bench_scratches",
+    "renderer": "reflets.bench.renderer:bench_renderer",
+}
 
 
-def register_suite(name: str):
-    def wrap(fn):
-        if name in SUITES:
-            raise ValueError(f"benchmark suite '{name}' is registered twice")
-        SUITES[name] = fn
-        return fn
-
-    return wrap
+def suite(name: str) -> Callable[[bool, Path], tuple[dict, str]]:
+    if name not in SUITES:
+        raise ArgumentError(f"unknown suite '{name}'; allowed: {', '.join(sorted(SUITES))}", field="suite")
+    module, function = SUITES[name].split(":")
+    return getattr(importlib.import_module(module), function)
 
 
 def machine() -> dict:
@@ -42,15 +51,12 @@ def machine() -> dict:
 
 
 def run_suite(name: str, out_dir: Path, quick: bool = False) -> dict:
-    from . import arealights, reference, reflections, renderer, scratches, translucency  # noqa: F401  (register)
-
-    if name not in SUITES:
-        raise ArgumentError(f"unknown suite '{name}'; allowed: {', '.join(sorted(SUITES))}", field="suite")
+    run = suite(name)
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OutputError(f"cannot create the results folder ({exc.strerror})", file=out_dir) from None
-    results, markdown = SUITES[name](quick, out_dir)
+    results, markdown = run(quick, out_dir)
     info = machine()
     results = {"suite": name, "quick": quick, "machine": info, **results}
     gl = info["opengl"].get("renderer", info["opengl"].get("error", "?"))

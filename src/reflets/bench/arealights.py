@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RefletsError
-from . import register_suite
 
 #: the same plane lit by one point light at the light's centre: the cost floor of a shading pass
 POINT_LIGHT = {"type": "point", "position": [0, 1, 0], "intensity": [5, 5, 5]}
@@ -72,7 +71,6 @@ def _time_image(technique, size, spp: int, repeats: int) -> float:
     return statistics.median(times)
 
 
-@register_suite("arealights")
 def bench_arealights(quick: bool, out_dir: Path) -> tuple[dict, str]:
     import reflets
 
@@ -232,7 +230,6 @@ def _cost_markdown(cost: dict, size) -> str:
     return "\n".join(lines + [""])
 
 
-@register_suite("ltc-cost")
 def bench_ltc_cost(quick: bool, out_dir: Path) -> tuple[dict, str]:
     """Only the ltc cost comparison of ``arealights`` (a minute, not an hour)."""
     from ..gpu import get_context

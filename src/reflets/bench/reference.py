@@ -11,7 +11,6 @@ import statistics
 
 from ..demo import scene_path
 from ..scene import load_scene
-from . import register_suite
 
 SCENES = ["10_ref_plane_quad.toml", "11_ref_ggx_sphere_quad.toml", "12_ref_sphere_env.toml"]
 
@@ -24,7 +23,6 @@ def _mitsuba_available() -> bool:
     return True
 
 
-@register_suite("reference")
 def bench_reference(quick: bool, out_dir) -> tuple[dict, str]:
     from ..reference import reference
 

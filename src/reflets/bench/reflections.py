@@ -25,8 +25,6 @@ from pathlib import Path
 
 import numpy as np
 
-from . import register_suite
-
 SCENES = {
     "teapot + sphere": "40_reflect_teapot_sphere.toml",
     "room + ellipsoid": "41_reflect_room.toml",
@@ -69,7 +67,7 @@ def convergence(pairs: int) -> dict:
     """Fraction converged vs iterations for each surface and solver (NumPy), and the GPU's at 4 / 5 / 8."""
     from ..gpu import get_context
     from ..reflections import Cylinder, Ellipsoid, Sphere, Torus, random_valid_pairs, solve_document, solve_robust
-    from ..techniques.reflections import Fermat
+    from ..reflections.technique import Fermat
 
     surfaces = {
         "sphere": Sphere(),
@@ -162,8 +160,8 @@ def edge_deviation(size=(1024, 768), samples: int = 2000) -> list[dict]:
     its k + 1 vertices joined by straight segments) and its exact reflection."""
     from ..gpu import get_context
     from ..reflections import Sphere, sphere_reflection
+    from ..reflections.technique import Fermat
     from ..scene.camera import project
-    from ..techniques.reflections import Fermat
 
     scene = _scene("teapot + sphere")
     sphere = scene.mesh[0]
@@ -192,7 +190,6 @@ def edge_deviation(size=(1024, 768), samples: int = 2000) -> list[dict]:
     return rows
 
 
-@register_suite("reflections")
 def bench_reflections(quick: bool, out_dir: Path) -> tuple[dict, str]:
     size = (200, 150) if quick else (400, 300)
     results = {

@@ -21,7 +21,6 @@ import numpy as np
 from ..demo import scene_path
 from ..metrics import compare
 from ..scene import load_dict, load_scene
-from . import register_suite
 
 
 def _orbit(scene, frames: int) -> list[dict]:
@@ -166,7 +165,6 @@ def _scaling(size, frames: int) -> tuple[list[dict], list[str]]:
     return rows, lines
 
 
-@register_suite("renderer")
 def bench_renderer(quick: bool, out_dir) -> tuple[dict, str]:
     size, frames, every = ((160, 120), 6, 3) if quick else ((640, 480), 60, 10)
     showcase, lines = _showcase(size, frames, every)

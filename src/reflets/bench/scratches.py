@@ -26,8 +26,6 @@ from pathlib import Path
 
 import numpy as np
 
-from . import register_suite
-
 PROFILES = ("vgroove:0.5", "quartic:0.5")
 IRON = (2.91, 3.09)  # the document's iron at 650 nm (grey)
 MODELS = ("full", "1-bounce", "NDF", "AS00")
@@ -275,7 +273,6 @@ def gpu_technique(quick: bool) -> dict:
     return {"rows": rows, "document_ms": {"brushed": [166, 749, 1850, 3540], "scratched": [93, 185, 419, 776]}}
 
 
-@register_suite("scratches")
 def bench_scratches(quick: bool, out_dir: Path) -> tuple[dict, str]:
     if quick:
         pre = (64, 1000, 2)

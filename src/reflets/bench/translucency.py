@@ -30,8 +30,6 @@ from pathlib import Path
 
 import numpy as np
 
-from . import register_suite
-
 #: (label, rings, angles, radius in mean free paths): the document's Fig 7.2 settings
 FIG_72 = [("168 / 10 mfp", 12, 14, 10.0), ("336 / 15 mfp", 21, 16, 15.0), ("1200 / 30 mfp", 40, 30, 30.0)]
 
@@ -391,7 +389,6 @@ def plot_error_time(rows: list[dict], path: Path, noise: float) -> None:
     plt.close(fig)
 
 
-@register_suite("translucency")
 def bench_translucency(quick: bool, out_dir: Path) -> tuple[dict, str]:
     # Sizes: the document's 1024×768 for the costs and Fig 7.2's error (its reference is stored: 2281 s in two
     # processes the first time); the index-matched study at 384×288 (its reference is stored too, 24 s).

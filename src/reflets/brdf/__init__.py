@@ -14,7 +14,6 @@ from .measured import Measured
 from .microfacet import Microfacet
 from .mirror import Mirror
 from .phong import Phong
-from .translucent import Translucent
 from .ward import Ward
 
 __all__ = [
@@ -29,6 +28,5 @@ __all__ = [
     "AshikhminShirley",
     "Microfacet",
     "Measured",
-    "Translucent",
     "Mirror",
 ]

@@ -21,11 +21,15 @@ class FrameTimer:
     ctx: object
     gpu_ms: list[float] = field(default_factory=list)
     wall_ms: list[float] = field(default_factory=list)
+    _query: object = field(default=None, repr=False)
 
     @contextmanager
     def frame(self):
-        use_query = not is_software(self.ctx)
-        query = self.ctx.query(time=True) if use_query else None
+        query = None
+        if not is_software(self.ctx):  # one query, reused: moderngl's Query has no release()
+            if self._query is None:
+                self._query = self.ctx.query(time=True)
+            query = self._query
         self.ctx.finish()
         start = time.perf_counter()
         if query is not None:
@@ -37,7 +41,6 @@ class FrameTimer:
         self.wall_ms.append((time.perf_counter() - start) * 1e3)
         if query is not None:
             self.gpu_ms.append(query.elapsed / 1e6)
-            query.release()
 
     def summary(self) -> dict[str, float | None]:
         """Medians (robust to the noise of shared machines) and the frame count."""

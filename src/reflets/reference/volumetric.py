@@ -148,9 +148,9 @@ class VolumetricImage:
 
 
 def _check_volumetric_scene(scene):
-    from ..brdf.translucent import Translucent
     from ..errors import ArgumentError
     from ..scene.model import DirectionalLight, PointLight
+    from ..translucency.material import Translucent
 
     materials = {mesh.material for mesh in scene.mesh}
     if len(materials) != 1 or not isinstance(scene.materials[next(iter(materials))], Translucent):
@@ -244,8 +244,8 @@ class _VolumetricJob:
     """One scene's camera rays, geometry and light, ready to draw samples (rebuilt in each worker process)."""
 
     def __init__(self, scene, refract, orders):
-        from ..reference.geometry import MESHES, SceneGeometry
         from ..scene.camera import pixel_rays
+        from .geometry import MESHES, SceneGeometry
 
         material, self.light = _check_volumetric_scene(scene)
         self.geometry = SceneGeometry(scene)
@@ -391,7 +391,7 @@ def _planar_start(geometry, u, eta: float, omega, origin, point: bool) -> None:
     """Newton's starting ray (in place): the exact refracted connection through the tangent plane where the
     straight line from the light to u meets the boundary (Snell in the plane of incidence, a monotonic 1-D
     equation solved by bisection); it leaves a couple of iterations on the mesh instead of a dozen."""
-    from ..reference.geometry import MESHES
+    from .geometry import MESHES
 
     hits = geometry.intersect(origin, omega)
     hit = np.nonzero(hits.kind == MESHES)[0]
@@ -438,7 +438,7 @@ def _refracted_connection(geometry, u, eta: float, *, light_pos=None, travel=Non
     missing traces, or the boundary between y and u (light entering elsewhere, e.g. through a thin part and out
     again, is not followed)."""
     from ..brdf.base import orthonormal_basis
-    from ..reference.geometry import MESHES
+    from .geometry import MESHES
 
     n = len(u)
     radius = geometry.radius
@@ -607,8 +607,8 @@ def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng
 
 def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits, rays, rng, orders=None):
     """One path per camera ray (channel per path) through a smooth dielectric boundary (render_volumetric)."""
-    from ..reference.geometry import MESHES
     from ..scene.model import DirectionalLight
+    from .geometry import MESHES
 
     eta = float(medium.eta)
     sigma_t = np.asarray(medium.sigma_t, np.float64)[channel] * scale

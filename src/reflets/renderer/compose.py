@@ -32,12 +32,12 @@ import numpy as np
 from pydantic import Field
 
 from ..brdf.mirror import Mirror
-from ..brdf.translucent import Translucent
 from ..gpu import FrameTimer, HDRTarget
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scratches.material import Scratched
 from ..techniques.base import Technique, TechniqueParams, get_technique, register_technique
 from ..techniques.forward import Forward, GridSide, PassRole, check_target_size, samples_per_pixel_side
+from ..translucency.material import Translucent
 
 #: the method of a scene that names none
 DEFAULT_METHOD = "auto"

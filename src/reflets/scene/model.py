@@ -13,8 +13,6 @@ from typing import Annotated, Any, Literal, Union
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
 
-from .materials import MaterialSpec
-
 Finite = Annotated[float, Field(allow_inf_nan=False)]
 NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
@@ -338,7 +336,9 @@ class Scene(Strict):
     title: str | None = None
     description: str | None = None
     camera: Camera
-    materials: dict[str, MaterialSpec] = Field(default_factory=dict)
+    # every registered material, by its ``type``: the union is completed by reflets.materials (above the
+    # technique packages that define some materials), which importing reflets runs first
+    materials: dict[str, MaterialSpec] = Field(default_factory=dict)  # noqa: F821
     mesh: list[Mesh] = Field(default_factory=list)
     light: list[Light] = Field(default_factory=list)
     background: Color | Literal["environment"] | None = None

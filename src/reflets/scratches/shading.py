@@ -1,4 +1,4 @@
-"""NumPy twin of the ``scratches`` technique's per-pixel estimator (techniques/scratches/shaders/scratches.frag).
+"""NumPy twin of the ``scratches`` technique's per-pixel estimator (scratches/shaders/scratches.frag).
 
 For shading points given by their view direction ``wo`` (local frame: x = tangent u, y = bitangent, z = normal)
 and α vector, the reflected radiance of the layered SV-BRDF (eq 3.4) is

@@ -6,7 +6,7 @@ What it computes, exactly or not:
   other objects unless it says so);
 - quad and polygon area lights: the midpoint rule of the area-light document (eq 2.8) with ``area_samples``²
   points per quad (per triangle of a polygon fan); converges as O(1/n²); the dedicated area-light methods
-  (adaptive, cone, LTC, exact diffuse) come with ``reflets.techniques.arealights``;
+  (adaptive, cone, LTC, exact diffuse) come with ``reflets.arealights``;
 - environment maps: ``env_grid`` distant lights whose powers integrate the map exactly (diffuse-accurate,
   blurry for sharp lobes);
 - the image is one sample per pixel at the pixel centre; ``spp`` = s² gives an s×s stratified supersample.

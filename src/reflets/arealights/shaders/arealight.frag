@@ -1,0 +1,32 @@
+// Provides the area-light shading pass: forward lighting for point / directional / environment lights plus,
+// for every polygon light, the contribution of the method in slot AREA (area_light_contribution).
+#include BRDF
+#include "reflets/techniques/shaders/lights.glsl"
+#include "reflets/arealights/shaders/polygon.glsl"
+#include "reflets/arealights/shaders/material_lobe.glsl"
+#include AREA
+
+in vec3 v_position;
+in vec3 v_normal;
+in vec4 v_tangent;
+in vec2 v_uv;
+
+uniform vec3 u_eye;
+
+out vec4 f_color;
+
+void main() {
+    vec3 n = normalize(v_normal);
+    if (!gl_FrontFacing) n = -n;
+    mat3 frame = shading_frame(n, v_tangent);
+    vec3 wo = transpose(frame) * normalize(u_eye - v_position);
+    vec3 sum = direct_lighting(v_position, frame, wo);
+#if N_POLYGONS > 0
+    for (int i = 0; i < N_POLYGONS; ++i) sum += area_light_contribution(i, v_position, frame, wo);
+#endif
+#if OUTPUT == 4
+    f_color = vec4(vec3(float(g_samples)), 1.0);
+#else
+    f_color = vec4(sum, 1.0);
+#endif
+}

@@ -1,0 +1,448 @@
+"""``fermat``: exact specular reflections in curved smooth reflectors, per vertex (Roger & Holzschuch 2005).
+
+Instead of an environment map (exact only for objects at infinity), every scene vertex V is moved to its
+reflection point P on the reflector — the stationary point of the path length |E − f(u, v)| + |V − f(u, v)|
+(Fermat's principle) — and the rasteriser draws the mirror image of the scene between reflected vertices.
+Exact at vertices, with correct parallax at any distance; edges between vertices stay straight on screen
+(``subdivide`` splits every reflected triangle into k² so that they bend).
+
+Passes per frame (the document's §3.2, with its silhouette problem fixed):
+
+1. the scene as ``forward`` renders it (reflectors show their non-specular part);
+2. a G-buffer of the nearest surface per pixel: world position, reflector id, normal;
+3. per reflector, the scene without reflectors through ``reflected.vert``: each vertex's reflection point by
+   the solver (``solver = "robust"``: Newton steps with the analytic Hessian in a local chart, residual check
+   and rejection of back-facing / non-existent reflections; ``"document"``: the document's triangle-secant
+   iteration), depth |PV| (level-1 visibility: the object nearest to the mirror wins); fragments are kept only
+   on this reflector's visible pixels (an exact id test: linearly interpolated triangles spill past the
+   silhouette, which the document's "behind" test alone does not reject) and when P is not behind the
+   visible surface (level 2); they are lit with the eye at P;
+4. composite: reflectance (constant or conductor Fresnel) × the reflected image — or the background along the
+   mirror direction where no reflected geometry was drawn — added onto pass 1.
+
+Reflectors: ``reflector = true`` meshes with a ``mirror`` material, of shape sphere (with any transform: an
+ellipsoid), torus, open cylinder (``caps = false``) or plane, solved on their exact parametric surface.
+Limits (as in the document): one reflection per vertex (a vertex with several reflection points shows one),
+reflectors do not appear in reflections, no shadows (like every reflets method unless it says so).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar, Literal
+
+import moderngl
+import numpy as np
+from pydantic import Field
+
+from ..errors import ArgumentError
+from ..gpu import ProgramSpec, get_program, set_uniforms
+from ..scene.geometry import bounding_sphere, mesh_data
+from ..scene.lightmask import quad_uv
+from ..scene.meshdata import MeshData
+from ..scene.model import CylinderMesh, PlaneMesh, PolygonLight, QuadLight, Scene, SphereMesh, TorusMesh
+from ..scene.surfaces import SampledSurface
+from ..techniques.base import register_technique
+from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams, polygon_normal
+from .scene import canonical_surface
+from .solver import SOLVERS, SURFACE_KINDS, glsl_constants
+
+SHADERS = "reflets/reflections/shaders/"
+MESH_VERT = "reflets/techniques/shaders/mesh.vert"
+SOLVER_FLAGS = frozenset({"SURFACE_KIND", "SOLVER", "ITERATIONS", "COUNT_ITERATIONS"})
+GBUFFER_PROGRAM = ProgramSpec("fermat_gbuffer", vertex=MESH_VERT, fragment=SHADERS + "gbuffer.frag")
+REFLECTED_PROGRAM = ProgramSpec(
+    "fermat_reflected",
+    vertex=SHADERS + "reflected.vert",
+    fragment=SHADERS + "reflected.frag",
+    flags=LIGHT_FLAGS | SOLVER_FLAGS | {"REFLECTED_EMITTER", "EMITTER_MASK"},
+    constants=glsl_constants(),
+)
+COMPOSITE_PROGRAM = ProgramSpec(
+    "fermat_composite",
+    vertex="reflets/techniques/shaders/background.vert",
+    fragment=SHADERS + "composite.frag",
+    flags=frozenset({"BACKGROUND_ENV"}),
+)
+POINTS_PROGRAM = ProgramSpec(
+    "fermat_points",
+    vertex=SHADERS + "points.vert",
+    flags=SOLVER_FLAGS,
+    constants=glsl_constants(),
+    varyings=("t_position", "t_normal", "t_valid", "t_residual", "t_iterations"),
+)
+#: SURFACE_KIND values of solver.glsl
+DEFAULT_ITERATIONS = {"robust": 8, "document": 5}
+#: texture units of the G-buffer and reflection images (materials use 1…, the environment 0)
+GBUFFER_UNITS = (12, 13, 14)
+#: texture unit of a sampled reflector's node grid
+GRID_UNIT = 15
+
+
+#: the coarse grid of the segment hit on sampled reflectors (NumPy twin: SampledSurface.hit_grid)
+SAMPLED_HIT_GRID = 8
+#: node grid of a reflector sampled into a texture when the scene does not say
+DEFAULT_SAMPLES = 64
+
+
+@dataclass(frozen=True)
+class Reflector:
+    """One reflector mesh as the solver sees it: canonical shape (kind, parameters, or a sampled grid) and
+    world transform x → A x + t."""
+
+    index: int
+    kind: str
+    params: tuple[float, float, float, float]
+    linear: np.ndarray
+    offset: np.ndarray
+    sampled: SampledSurface | None = None
+
+    def uniforms(self) -> dict[str, object]:
+        out = {
+            "r_linear": self.linear.T.astype(np.float32).tobytes(),  # column-major
+            "r_inverse": np.linalg.inv(self.linear).T.astype(np.float32).tobytes(),
+            "r_offset": tuple(float(c) for c in self.offset),
+            "r_params": self.params,
+        }
+        if self.sampled is not None:
+            s = self.sampled
+            out.update(
+                {
+                    "r_nodes": (int(s.positions.shape[1]), int(s.positions.shape[0])),
+                    "r_periodic": tuple(int(p) for p in s.periodic),
+                    "r_interior": tuple(float(c) for c in s.interior),
+                    "r_orientation": float(s.orientation),
+                    "r_hit_grid": int(s.hit_grid),
+                }
+            )
+        return out
+
+    def grid_texture(self, ctx):
+        """The padded node grid (GridInterpolator's) as an RGB float texture, or None for analytic kinds."""
+        if self.sampled is None:
+            return None
+        grid = np.ascontiguousarray(self.sampled._f.grid, dtype=np.float32)  # (n_v + 3, n_u + 3, 3)
+        texture = ctx.texture((grid.shape[1], grid.shape[0]), 3, grid.tobytes(), dtype="f4")
+        texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        return texture
+
+
+def sampled_surface(surface, samples: int) -> SampledSurface:
+    """A canonical surface sampled on ``samples``² nodes as the GPU stores it (bicubic, coarse hit grid)."""
+    out = SampledSurface.from_surface(surface, samples, "bicubic")
+    out.hit_grid = SAMPLED_HIT_GRID
+    return out
+
+
+def reflector_of(scene: Scene, index: int, samples: int | None = None) -> Reflector:
+    """The parametric surface of ``scene.mesh[index]``: analytic for sphere, torus, cylinder and plane unless
+    ``samples`` asks for a sampled texture; sampled for every other shape reflets.reflections knows (Bézier
+    and height-field patches); a clear error otherwise."""
+    mesh = scene.mesh[index]
+    m = mesh.transform.matrix()
+    linear, offset = m[:3, :3].copy(), m[:3, 3].copy()
+    params = None
+    if isinstance(mesh, SphereMesh):
+        kind, params = "sphere", (mesh.radius, 0.0, 0.0, 0.0)
+    elif isinstance(mesh, TorusMesh):
+        kind, params = "torus", (mesh.major, mesh.minor, 0.0, 0.0)
+    elif isinstance(mesh, CylinderMesh):
+        kind, params = "cylinder", (mesh.radius, mesh.height, 0.0, 0.0)
+    elif isinstance(mesh, PlaneMesh):
+        kind, params = "plane", (mesh.size[0], mesh.size[1], 0.0, 0.0)
+    if params is None or samples is not None:
+        surface = canonical_surface(mesh, index)  # the scene error for shapes no surface describes
+        grid = sampled_surface(surface, samples or DEFAULT_SAMPLES)
+        return Reflector(index, "sampled", (0.0, 0.0, 0.0, 0.0), linear, offset, grid)
+    return Reflector(index, kind, tuple(float(p) for p in params), linear, offset)
+
+
+def emitter_mesh(light: QuadLight | PolygonLight) -> MeshData:
+    """A polygon light as a fan mesh of mesh.vert's layout (normal = the emitting side; uv = a quad's (u, v), where
+    its mask is read)."""
+    poly = light.polygon()
+    n = polygon_normal(poly)
+    t = poly[1] - poly[0]
+    t /= np.linalg.norm(t)
+    k = np.arange(1, len(poly) - 1)
+    uv = np.zeros((len(poly), 2), np.float32)
+    return MeshData(
+        positions=poly.astype(np.float32),
+        normals=np.tile(n, (len(poly), 1)).astype(np.float32),
+        tangents=np.tile([*t, 1.0], (len(poly), 1)).astype(np.float32),
+        uvs=np.stack(quad_uv(light, poly), axis=-1).astype(np.float32) if isinstance(light, QuadLight) else uv,
+        indices=np.stack([np.zeros_like(k), k, k + 1], axis=1).astype(np.uint32),
+    )
+
+
+class FermatParams(ForwardParams):
+    """Parameters of ``fermat``."""
+
+    solver: Literal["robust", "document"] = Field(
+        "robust", description="robust: Newton in a local chart with checks; document: the triangle-secant iteration"
+    )
+    iterations: int | None = Field(None, ge=1, le=64, description="solver iterations (default 8 robust, 5 document)")
+    subdivide: int | Literal["auto"] = Field(
+        "auto",
+        description="reflected triangles split into k² so reflected edges bend; auto: per mesh, the smallest k "
+        "that makes every triangle span at most max_angle seen from the reflector",
+    )
+    max_angle: float = Field(4.0, gt=0.0, le=90.0, description="subdivide = auto: degrees per reflected triangle")
+    sampled: int | None = Field(
+        None,
+        ge=4,
+        le=1024,
+        description="solve on every reflector sampled into an N×N float texture (bicubic) instead of its analytic "
+        "form; Bézier and height-field reflectors are always sampled (64² unless given)",
+    )
+    hidden_tolerance: float = Field(
+        0.02, ge=0.0, le=1.0, description="how far (× the reflector's radius) P may lie behind the visible surface"
+    )
+
+
+@register_technique
+class Fermat(Forward):
+    """Per-vertex Fermat reflections in smooth curved reflectors (see the module docstring)."""
+
+    name: ClassVar[str] = "fermat"
+    summary: ClassVar[str] = "exact reflections in curved mirrors: per-vertex Fermat search on the GPU"
+    Params: ClassVar = FermatParams
+
+    def prepare(self, scene: Scene) -> None:
+        if not any(mesh.reflector for mesh in scene.mesh):
+            raise ArgumentError(
+                "the fermat method needs a mesh with reflector = true (and a mirror material)", field="mesh"
+            )
+        super().prepare(scene)
+        ctx = self.ctx
+        self._reflectors = [
+            reflector_of(scene, i, self.params.sampled) for i, mesh in enumerate(scene.mesh) if mesh.reflector
+        ]
+        self._grids = [r.grid_texture(ctx) for r in self._reflectors]
+        self._objects += [g for g in self._grids if g is not None]
+        self._gbuffer_size = None
+        meshes = [mesh_data(scene, i) for i in range(len(scene.mesh))]
+        ids = {r.index: k + 1 for k, r in enumerate(self._reflectors)}
+        bounds = [bounding_sphere(meshes[r.index].positions.astype(np.float64)) for r in self._reflectors]
+        centres = [centre for centre, _ in bounds]
+        gbuffer = get_program(ctx, GBUFFER_PROGRAM)
+        self._gbuffer_draws = []  # (vao, reflector id)
+        self._reflected_meshes = []  # (mesh data subdivided, material)
+        self.subdivisions = []  # k per reflected mesh (emitters last), for reports
+        for index, (mesh, data) in enumerate(zip(scene.mesh, meshes, strict=True)):
+            self._gbuffer_draws.append((self.mesh_vertex_array(gbuffer, data), float(ids.get(index, 0))))
+            if index not in ids:
+                k = self._subdivision(data, centres)
+                self.subdivisions.append(k)
+                self._reflected_meshes.append((data.subdivided(k), scene.materials[mesh.material]))
+        self._reflected_emitters = []
+        points = [data.positions for data in meshes]
+        for light in scene.light:
+            if isinstance(light, QuadLight | PolygonLight):
+                data = emitter_mesh(light)
+                points.append(data.positions)
+                self._gbuffer_draws.append((self.mesh_vertex_array(gbuffer, data), 0.0))
+                k = self._subdivision(data, centres)
+                self.subdivisions.append(k)
+                self._reflected_emitters.append((data.subdivided(k), light))
+        self._depth_range = 4.0 * bounding_sphere(np.concatenate(points))[1]
+        # per reflector: its draws through the solver (vertex arrays bound to that reflector's programs)
+        self._reflection_draws = [self._reflector_draws(r) for r in self._reflectors]
+        self._composites = []
+        for r, (_, size) in zip(self._reflectors, bounds, strict=True):
+            material = scene.materials[scene.mesh[r.index].material]
+            program = get_program(
+                ctx,
+                COMPOSITE_PROGRAM,
+                slots={"BRDF": material.glsl},
+                BACKGROUND_ENV=int(scene.background_color() is None),
+                **material.flags(),
+            )
+            vao = ctx.vertex_array(program, [])
+            self._objects.append(vao)
+            self._composites.append((program, vao, material.uniforms(), size))
+
+    def _subdivision(self, data: MeshData, centres: list[np.ndarray]) -> int:
+        """k for one mesh: the given one, or (auto) the smallest making every triangle's longest edge span at
+        most ``max_angle`` seen from each reflector's centre — a reflected triangle is flat between its
+        vertices, so its straight edges and its chord below the curved mirror shrink with that angle."""
+        if self.params.subdivide != "auto":
+            return int(self.params.subdivide)
+        p = data.positions.astype(np.float64)[data.indices]
+        edge = np.max(np.linalg.norm(p - np.roll(p, 1, axis=1), axis=-1), axis=1)
+        angle = max(
+            float(np.max(edge / np.maximum(np.linalg.norm(p.mean(axis=1) - c, axis=-1), 1e-9))) for c in centres
+        )
+        return int(np.clip(np.ceil(angle / np.radians(self.params.max_angle)), 1, 16))
+
+    def _solver_flags(self, reflector: Reflector, count: bool = False) -> dict[str, int]:
+        solver = self.params.solver
+        return {
+            "SURFACE_KIND": SURFACE_KINDS[reflector.kind],
+            "SOLVER": SOLVERS[solver],
+            "ITERATIONS": self.params.iterations or DEFAULT_ITERATIONS[solver],
+            "COUNT_ITERATIONS": int(count),
+        }
+
+    def _reflector_draws(self, reflector: Reflector) -> list[tuple]:
+        ctx = self.ctx
+        solver = self._solver_flags(reflector)
+        draws = []
+        for data, material in self._reflected_meshes:
+            program = get_program(
+                ctx,
+                REFLECTED_PROGRAM,
+                slots={"BRDF": material.glsl},
+                REFLECTED_EMITTER=0,
+                EMITTER_MASK=0,
+                **self._light_flags,
+                **material.flags(),
+                **solver,
+            )
+            uniforms = {**material.uniforms(), **reflector.uniforms()}
+            draws.append((program, self.mesh_vertex_array(program, data), uniforms, material.textures(ctx)))
+        masks = {id(light): mask for _, _, light, mask in self._emitters}  # the forward pass's mask textures
+        for data, light in self._reflected_emitters:
+            mask = masks.get(id(light))
+            program = get_program(
+                ctx,
+                REFLECTED_PROGRAM,
+                slots={"BRDF": "reflets/brdf/glsl/lambert.glsl"},  # compiled out: an emitter is not shaded
+                REFLECTED_EMITTER=1,
+                EMITTER_MASK=int(mask is not None),
+                **self._light_flags,
+                **solver,
+            )
+            uniforms = {
+                "u_radiance": tuple(light.radiance),
+                "u_two_sided": bool(light.two_sided),
+                **reflector.uniforms(),
+            }
+            textures = {"u_mask": mask} if mask is not None else {}
+            draws.append((program, self.mesh_vertex_array(program, data), uniforms, textures))
+        return draws
+
+    # ------------------------------------------------------------------ per-size images
+    def _images(self, size: tuple[int, int]):
+        """G-buffer (position + id, normal) and reflection image at a render size, re-created on change."""
+        if self._gbuffer_size == size:
+            return self._gbuffer
+        ctx = self.ctx
+        position, normal, reflection = (ctx.texture(size, 4, dtype="f4") for _ in range(3))
+        for tex in (position, normal, reflection):
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        depth_g, depth_r = ctx.depth_texture(size), ctx.depth_texture(size)
+        gbuffer_fbo = ctx.framebuffer(color_attachments=[position, normal], depth_attachment=depth_g)
+        reflection_fbo = ctx.framebuffer(color_attachments=[reflection], depth_attachment=depth_r)
+        self._objects += [position, normal, reflection, depth_g, depth_r, gbuffer_fbo, reflection_fbo]
+        self._gbuffer = (gbuffer_fbo, reflection_fbo, position, normal, reflection)
+        self._gbuffer_size = size
+        return self._gbuffer
+
+    # ------------------------------------------------------------------ frame
+    def _draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
+        super()._draw(target, view_proj, vp_bytes, frame, seed)
+        if self.params.output != "radiance" or not self.role.extras:
+            return
+        ctx = self.ctx
+        gbuffer_fbo, reflection_fbo, position, normal, reflection = self._images(target.size)
+        eye = tuple(float(c) for c in self.scene.camera.position)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.disable(ctx.CULL_FACE)
+        gbuffer_fbo.use()
+        ctx.viewport = (0, 0, *target.size)
+        gbuffer_fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        program = get_program(ctx, GBUFFER_PROGRAM)
+        for vao, reflector_id in self._gbuffer_draws:
+            set_uniforms(program, {"u_view_proj": vp_bytes, "u_reflector_id": reflector_id})
+            vao.render()
+        position.use(GBUFFER_UNITS[0])
+        normal.use(GBUFFER_UNITS[1])
+        for k, draws in enumerate(self._reflection_draws):
+            reflector_id = float(k + 1)
+            program_c, vao_c, material_uniforms, size = self._composites[k]
+            reflection_fbo.use()
+            ctx.viewport = (0, 0, *target.size)
+            reflection_fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+            if self._grids[k] is not None:
+                self._grids[k].use(GRID_UNIT)
+            common = {
+                "r_grid": GRID_UNIT,
+                "u_view_proj": vp_bytes,
+                "u_eye": eye,
+                "u_depth_range": self._depth_range,
+                "u_gbuffer_position": GBUFFER_UNITS[0],
+                "u_gbuffer_normal": GBUFFER_UNITS[1],
+                "u_reflector_id": reflector_id,
+                "u_hidden_tolerance": self.params.hidden_tolerance * size,
+            }
+            for program, vao, uniforms, textures in draws:
+                samplers = {}
+                for unit, (name, texture) in enumerate(textures.items(), start=1):
+                    texture.use(unit)
+                    samplers[name] = unit
+                set_uniforms(program, {**uniforms, **samplers, **common})
+                vao.render()
+            # composite onto the image: additive, no depth test
+            target.fbo.use()
+            ctx.viewport = (0, 0, *target.size)
+            ctx.disable(ctx.DEPTH_TEST)
+            ctx.enable(ctx.BLEND)
+            ctx.blend_func = moderngl.ONE, moderngl.ONE
+            reflection.use(GBUFFER_UNITS[2])
+            uniforms = {
+                **material_uniforms,
+                "u_gbuffer_position": GBUFFER_UNITS[0],
+                "u_gbuffer_normal": GBUFFER_UNITS[1],
+                "u_reflection": GBUFFER_UNITS[2],
+                "u_reflector_id": reflector_id,
+                "u_eye": eye,
+            }
+            color = self.scene.background_color()
+            if color is None:
+                from ..equirect import rotation_y
+
+                self._env_texture.use(0)
+                uniforms["u_env"] = 0
+                uniforms["u_env_from_world"] = rotation_y(self.scene.environment.rotate_y).astype(np.float32).tobytes()
+            else:
+                uniforms["u_background"] = tuple(color)
+            set_uniforms(program_c, uniforms)
+            vao_c.render(vertices=3)
+            ctx.disable(ctx.BLEND)
+            ctx.enable(ctx.DEPTH_TEST)
+        ctx.disable(ctx.DEPTH_TEST)
+
+    # ------------------------------------------------------------------ the solver alone
+    def reflection_points(self, vertices: np.ndarray, eyes=None, reflector: int = 0) -> dict[str, np.ndarray]:
+        """The GPU solver's result for points ``vertices`` (N, 3) seen from ``eyes`` (N, 3; default the scene
+        camera), read back by transform feedback: position, normal, valid, residual, iterations per point
+        (tests and benchmarks compare them with the NumPy solver and exact references)."""
+        ctx = self.ctx
+        r = self._reflectors[reflector]
+        program = get_program(ctx, POINTS_PROGRAM, **self._solver_flags(r, count=True))
+        vertices = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
+        eyes = np.broadcast_to(self.scene.camera.position if eyes is None else eyes, vertices.shape)
+        data = np.ascontiguousarray(np.concatenate([vertices, eyes], axis=1), dtype=np.float32)
+        vbo = ctx.buffer(data.tobytes())
+        out = ctx.buffer(reserve=len(vertices) * 9 * 4)
+        vao = ctx.vertex_array(program, [(vbo, "3f 3f", "in_position", "in_eye")])
+        fbo = ctx.simple_framebuffer((1, 1))  # a draw needs a complete framebuffer, even with nothing rasterised
+        try:
+            fbo.use()
+            if self._grids[reflector] is not None:
+                self._grids[reflector].use(GRID_UNIT)
+            set_uniforms(program, {**r.uniforms(), "r_grid": GRID_UNIT})
+            vao.transform(out, mode=moderngl.POINTS, vertices=len(vertices))
+            result = np.frombuffer(out.read(), dtype=np.float32).reshape(-1, 9).astype(np.float64)
+        finally:
+            ctx.detect_framebuffer(0).use()  # see HDRTarget.release
+            for obj in (vao, out, vbo, fbo):
+                obj.release()
+        return {
+            "position": result[:, 0:3],
+            "normal": result[:, 3:6],
+            "valid": result[:, 6] > 0.5,
+            "residual": result[:, 7],
+            "iterations": result[:, 8].astype(int),
+        }

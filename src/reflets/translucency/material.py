@@ -1,0 +1,162 @@
+"""Translucent material: a homogeneous scattering medium behind a dielectric boundary (skin, milk, marble…).
+
+The subsurface light transport itself (single scattering, dipole profiles) is computed by the ``translucent``
+technique (reflets.techniques.translucency). As a BRDF — what every other technique and the surface reference
+see — the material is its **far-field limit**: a rough dielectric specular reflection (Cook–Torrance with
+Beckmann D, separable Smith masking and the exact dielectric Fresnel) plus the diffusion profile integrated
+over the surface, i.e. the light a uniformly lit flat sample re-emits:
+
+    f_r = F_R(h) D G / (4 cosθ_o cosθ_i) + F_T(θ_i) F_T(θ_o) R_total / (π c),   c = 1 − 2 C_1^out,
+
+R_total = ∫ 2πr R_d(r) dr of the chosen profile (per channel) and C_1^out the first Fresnel moment for light
+arriving from outside, so that ∫ (diffuse term) cosθ_o dω_o = F_T(θ_i) R_total (d'Eon's normalisation).
+``roughness = 0`` means a smooth interface: no glossy lobe for point lights (the mirror reflection is not
+represented by a BRDF). Coefficients are per millimetre; ``mm_per_unit`` converts scene units.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from ..brdf.base import RGB, Material, register_material, upper
+from ..fresnel import fresnel_dielectric
+from .optics import beckmann_d, fresnel_transmittance
+
+
+@register_material
+class Translucent(Material):
+    """Homogeneous translucent medium with a dielectric boundary.
+
+    Parameters
+    ----------
+    preset : one of the twelve measured materials of Jensen et al. 2001 (apple, chicken1, chicken2, cream,
+        ketchup, marble, potato, skimmilk, skin1, skin2, spectralon, wholemilk), default none
+        Sets sigma_a, sigma_s_prime and eta (1.3; marble 1.5) unless they are given explicitly.
+    sigma_a : [r, g, b] in 1/mm, ≥ 0
+        Absorption coefficient.
+    sigma_s_prime : [r, g, b] in 1/mm, ≥ 0
+        Reduced scattering coefficient σ'_s = σ_s (1 − g). Give this or ``sigma_s``.
+    sigma_s : [r, g, b] in 1/mm, ≥ 0
+        Scattering coefficient (with ``g``).
+    g : float in (−1, 1), default 0
+        Henyey–Greenstein mean cosine (single scattering's phase function).
+    eta : float ≥ 1, default 1.3 (preset's)
+        Relative index of refraction n_inside / n_outside; 1 = index-matched boundary (no Fresnel, no refraction).
+    roughness : float ≥ 0, default 0
+        Beckmann m of the specular interface; 0 = smooth (no glossy highlight).
+    profile : "dipole" | "better_dipole" | "normalized_diffusion", default "better_dipole"
+        Diffusion profile of the multiple scattering.
+    single_scattering : bool, default true
+        Add the single-scattering term (technique ``translucent``).
+    mm_per_unit : float > 0, default 1
+        Millimetres per scene unit.
+    """
+
+    type: Literal["translucent"] = "translucent"
+    preset: str | None = None
+    sigma_a: RGB | None = None
+    sigma_s_prime: RGB | None = None
+    sigma_s: RGB | None = None
+    g: float = Field(0.0, gt=-1, lt=1)
+    eta: float | None = Field(None, ge=1.0, le=3.0)
+    roughness: float = Field(0.0, ge=0.0, le=1.0)
+    profile: Literal["dipole", "better_dipole", "normalized_diffusion"] = "better_dipole"
+    single_scattering: bool = True
+    mm_per_unit: float = Field(1.0, gt=0, allow_inf_nan=False)
+    glsl = "reflets/translucency/shaders/translucent.glsl"
+
+    @model_validator(mode="after")
+    def _complete(self):
+        from ..translucency.medium import PRESETS
+
+        if self.preset is not None:
+            if self.preset not in PRESETS:
+                raise ValueError(f"unknown preset {self.preset!r}; allowed: {', '.join(sorted(PRESETS))}")
+            p = PRESETS[self.preset]
+            if self.sigma_a is None:
+                object.__setattr__(self, "sigma_a", tuple(p["sigma_a"]))
+            if self.sigma_s_prime is None and self.sigma_s is None:
+                object.__setattr__(self, "sigma_s_prime", tuple(p["sigma_s_prime"]))
+            if self.eta is None:
+                object.__setattr__(self, "eta", p["eta"])
+        if self.eta is None:
+            object.__setattr__(self, "eta", 1.3)
+        if self.sigma_a is None:
+            raise ValueError("give sigma_a (1/mm) or a preset")
+        if (self.sigma_s_prime is None) == (self.sigma_s is None):
+            raise ValueError("give exactly one of sigma_s_prime and sigma_s (1/mm), or a preset")
+        if np.any(np.asarray(self.sigma_a) + np.asarray(self.reduced_scattering) <= 0):
+            raise ValueError("sigma_a + sigma_s_prime must be > 0 in every channel")
+        return self
+
+    # ------------------------------------------------------------------ the medium
+    @property
+    def reduced_scattering(self) -> np.ndarray:
+        if self.sigma_s_prime is not None:
+            return np.asarray(self.sigma_s_prime, dtype=np.float64)
+        return np.asarray(self.sigma_s, dtype=np.float64) * (1.0 - self.g)
+
+    def medium(self):
+        """The scattering medium (coefficients in 1/mm) as a :class:`reflets.translucency.Medium`."""
+        from ..translucency.medium import Medium
+
+        sigma_s = (
+            np.asarray(self.sigma_s, dtype=np.float64)
+            if self.sigma_s is not None
+            else self.reduced_scattering / (1.0 - self.g)
+        )
+        return Medium(np.asarray(self.sigma_a, dtype=np.float64), sigma_s, self.g, float(self.eta))
+
+    def total_reflectance(self) -> np.ndarray:
+        """R_total of the profile, per channel (cached by reflets.translucency.profiles)."""
+        from ..translucency.profiles import total_reflectance
+
+        return total_reflectance(self.profile, self.medium())
+
+    def diffuse_factor(self) -> np.ndarray:
+        """R_total / (π c) per channel: the far-field diffuse term without its two Fresnel transmittances."""
+        from ..translucency.optics import diffuse_normalisation
+
+        return self.total_reflectance() / (np.pi * diffuse_normalisation(self.eta))
+
+    @property
+    def reciprocal(self) -> bool:
+        return True
+
+    # ------------------------------------------------------------------ BRDF (far-field limit)
+    def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        wo = np.asarray(wo, dtype=np.float64)
+        wi = np.asarray(wi, dtype=np.float64)
+        ok = upper(wo, wi)
+        co = np.clip(wo[..., 2], 1e-12, 1.0)
+        ci = np.clip(wi[..., 2], 1e-12, 1.0)
+        ft = fresnel_transmittance(ci, self.eta) * fresnel_transmittance(co, self.eta)
+        diffuse = ft[..., None] * self.diffuse_factor()
+        spec = 0.0
+        if self.roughness > 0.0:
+            h = wo + wi
+            h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
+            m = self.roughness
+            ch = np.clip(h[..., 2], 1e-12, 1.0)
+            d = beckmann_d(ch, m)
+            g = _beckmann_g1(co, m) * _beckmann_g1(ci, m)
+            fr = fresnel_dielectric(np.sum(wi * h, axis=-1), self.eta)
+            spec = (fr * d * g / (4.0 * co * ci))[..., None]
+        return np.where(ok, diffuse + spec, 0.0)
+
+    def uniforms(self) -> dict[str, object]:
+        return {
+            "m_eta": float(self.eta),
+            "m_roughness": float(self.roughness),
+            "m_diffuse": tuple(float(c) for c in self.diffuse_factor()),
+        }
+
+
+def _beckmann_g1(cos_theta, m):
+    """Smith G1 for Beckmann, Walter et al. 2007's rational approximation (the GLSL twin uses the same)."""
+    a = cos_theta / (m * np.sqrt(np.maximum(1.0 - cos_theta * cos_theta, 1e-300)))
+    approx = (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+    return np.where(a < 1.6, approx, 1.0)
