@@ -1,8 +1,10 @@
 """Warnings about scenes that render without error but not as the user meant: no silent black.
 
-A light facing away from every mesh, or a whole-frame method that ignores part of the scene (``analytic`` on a
-glossy material, ``ltc`` on a mirror reflector…), renders an image that is darker than the scene says and exits
-0. Each such case is one line on stderr (``RefletsWarning``; the CLI prints it as ``reflets: warning: …``).
+A light facing away from every mesh, a whole-frame method that ignores part of the scene (``analytic`` on a
+glossy material, ``ltc`` on a mirror reflector…), or a material its lights cannot show
+(``Material.lighting_warnings``: a scratch profile without a mirror peak under point lights) renders an image
+that is darker than the scene says and exits 0. Each such case is one line on stderr (``RefletsWarning``; the
+CLI prints it as ``reflets: warning: …``).
 """
 
 from __future__ import annotations
@@ -61,6 +63,9 @@ def scene_warnings(scene: Scene, method: str) -> list[str]:
             messages.append(
                 f"materials.{name}: method '{method}' renders this {kind} material {what}; use {' or '.join(own)}"
             )
+        if own is None or method in own:  # drawn by its own technique: what that cannot light
+            lights = {light.type for light in scene.light}
+            messages += [f"materials.{name}: {text}" for text in material.lighting_warnings(lights)]
         if method == "analytic" and _has_glossy_part(material) and _has_area_light(scene):
             messages.append(
                 f"materials.{name}: method 'analytic' integrates only Lambertian parts under quad / polygon lights; "

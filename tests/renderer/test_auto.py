@@ -74,6 +74,33 @@ def test_a_method_that_ignores_a_material_warns(ctx):
         reflets.render(sphere_scene("metal", "quad", size=(16, 12)), method="analytic")
 
 
+def test_a_scratch_profile_without_a_mirror_peak_under_a_point_light_warns():
+    """Dense V-grooves (walls at 45°) seen in the mirror direction of a point light render all black: warned;
+    the quartic's flat bottom keeps a mirror peak: no warning."""
+    from reflets.diagnostics import scene_warnings
+    from reflets.scratches.profiles import parse_profile
+
+    assert parse_profile("vgroove:0.5").flat_fraction() == 0.0
+    assert parse_profile("quartic:0.5").flat_fraction() > 1e-3
+
+    def scene(profile, light):
+        return reflets.load_dict(
+            {
+                "camera": {"position": [0, 1.5, 2.5], "look_at": [0, 0, 0], "size": [16, 12]},
+                "materials": {"s": {"type": "scratched", "preset": "3.14b", "profile": profile}},
+                "mesh": [{"shape": "plane", "size": [2, 2], "material": "s"}],
+                "light": [light],
+            }
+        )
+
+    point = {"type": "point", "position": [0, 1.5, -2.5], "intensity": [5, 5, 5]}
+    quad = {"type": "quad", "corners": [[-1, 2, -1], [1, 2, -1], [-1, 2, 1]], "radiance": [1, 1, 1]}
+    (message,) = scene_warnings(scene("vgroove:0.5", point), "auto")
+    assert message.startswith("materials.s: its scratch profile 'vgroove:0.5' has no flat part")
+    assert scene_warnings(scene("quartic:0.5", point), "auto") == []
+    assert scene_warnings(scene("vgroove:0.5", quad), "auto") == []
+
+
 def test_the_cli_warns_in_one_line_and_exits_0(ctx, tmp_path, capsys):
 
     from reflets.cli import main

@@ -74,6 +74,12 @@ class Material(BaseModel):
         uniforms, since a software rasteriser executes every side of a branch."""
         return {}
 
+    def lighting_warnings(self, light_types: set[str]) -> list[str]:
+        """Why this material would render (nearly) black under lights of these types (``point``,
+        ``directional``, ``quad``, ``polygon``, ``environment``): each a phrase for the scene's warnings. A
+        material knows how it is lit; the BRDF library's models are lit by every light type."""
+        return []
+
     def textures(self, ctx) -> dict[str, object]:
         """GPU textures the GLSL twin samples, by sampler uniform name (e.g. measured tables); none by default."""
         return {}

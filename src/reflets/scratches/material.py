@@ -269,6 +269,20 @@ class Scratched(Material):
     def pdf(self, wo, wi):
         return self.base.pdf(wo, wi)
 
+    def lighting_warnings(self, light_types: set[str]) -> list[str]:
+        """A profile without a flat part has no mirror peak: a point or directional light reflects off its walls
+        only far from the mirror direction, and where the base is covered the highlight is missing."""
+        from .profiles import parse_profile
+
+        delta = sorted(light_types & {"point", "directional"})
+        if not delta or parse_profile(self.profile).flat_fraction() > 1e-3:
+            return []
+        return [
+            f"its scratch profile '{self.profile}' has no flat part, hence no mirror peak: {' / '.join(delta)} "
+            "lights reflect off the scratch walls only, away from the mirror direction (the highlight may be "
+            "missing or black); use a profile with a flat part (quartic) or an area / environment light"
+        ]
+
     def uniforms(self) -> dict[str, object]:
         return {**self.base.uniforms(), "s_base_weight": self.base_weight()}
 

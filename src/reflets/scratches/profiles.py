@@ -94,6 +94,13 @@ class Profile:
         a, b = self.height(xs), self.height(1.0 - xs)
         return bool(np.allclose(a, b, rtol=0.0, atol=1e-9 * max(1.0, np.ptp(self.h))))
 
+    def flat_fraction(self, degrees: float = 1.0, samples: int = 1 << 16) -> float:
+        """Share of the profile's width tilted less than ``degrees`` from flat: what reflects a delta light
+        towards its mirror direction (the table's mirror peak). 0 for V-grooves, whose walls send it to
+        ±2·atan(slope) off the mirror direction."""
+        x = (np.arange(samples) + 0.5) / samples
+        return float(np.mean(np.abs(self.slope(x)) < np.tan(np.radians(degrees))))
+
     def cell_of(self, x) -> np.ndarray:
         """Index of the polyline cell containing x (x taken modulo 1)."""
         xm = np.mod(np.asarray(x, dtype=np.float64), 1.0)
