@@ -20,11 +20,11 @@ class RefletsWarning(UserWarning):
     """The scene renders, but part of it is ignored or unlit."""
 
 
-#: methods that shade each kind of material with its own technique (others fall back as the message says)
-OWN_METHOD = {
-    "translucent": ("auto", "translucent"),
-    "scratched": ("auto", "scratches"),
-    "reflector": ("auto", "fermat"),
+#: what a whole-frame method other than a material's own technique draws of it (``Material.techniques``)
+WITHOUT = {
+    "translucent": "by its far-field BRDF only (no subsurface transport)",
+    "scratches": "by its base BRDF only (no scratch lobes)",
+    "fermat": "without its mirror reflections (only the non-specular part)",
 }
 #: methods whose output is not radiance: nothing to warn about
 AOV_METHODS = ("position", "normal", "uv")
@@ -52,18 +52,15 @@ def scene_warnings(scene: Scene, method: str) -> list[str]:
         used = [i for i, mesh in enumerate(scene.mesh) if mesh.material == name]
         if not used:
             continue
-        kind = "reflector" if all(scene.mesh[i].reflector for i in used) else material.type
-        own = OWN_METHOD.get(kind)
-        if own is not None and method not in own:
-            what = {
-                "translucent": "by its far-field BRDF only (no subsurface transport)",
-                "scratched": "by its base BRDF only (no scratch lobes)",
-                "reflector": "without its mirror reflections (only the non-specular part)",
-            }[kind]
+        own = sorted({m for i in used for m in material.techniques(scene.mesh[i]).values()})
+        if own and method not in ("auto", *own):
+            kind = "reflector" if "fermat" in own else material.type
+            what = "; ".join(WITHOUT.get(m, f"without its {m} pass") for m in own)
+            alternatives = " or ".join(("auto", *own))
             messages.append(
-                f"materials.{name}: method '{method}' renders this {kind} material {what}; use {' or '.join(own)}"
+                f"materials.{name}: method '{method}' renders this {kind} material {what}; use {alternatives}"
             )
-        if own is None or method in own:  # drawn by its own technique: what that cannot light
+        else:  # drawn by its own technique: what that cannot light
             lights = {light.type for light in scene.light}
             messages += [f"materials.{name}: {text}" for text in material.lighting_warnings(lights)]
         if method == "analytic" and _has_glossy_part(material) and _has_area_light(scene):

@@ -59,6 +59,34 @@ def test_each_object_of_a_composed_frame_equals_its_own_technique(ctx):
         assert region_relmse(composed, own, mask) < 1e-3, mesh["material"]
 
 
+def test_the_pass_plan_follows_each_materials_techniques():
+    """Materials say which technique takes each light type (Material.techniques); the plan follows: the showcase
+    draws the marble by one translucent pass per point light plus its other lights added through the area
+    method, the plate by scratches, the BRDF meshes with the emitters, the mirror last."""
+    from reflets.demo import scene_path
+    from reflets.renderer.compose import pass_plan
+
+    scene = reflets.load_scene(scene_path("60_showcase.toml"))
+    assert scene.materials["marble"].techniques(scene.mesh[2]) == {"point": "translucent", "directional": "translucent"}
+    assert scene.materials["chrome"].techniques(scene.mesh[4].model_copy(update={"reflector": False})) == {}
+    plan = [
+        (m, [light.type for light in s.light], sorted(meshes), add) for m, s, meshes, add in pass_plan(scene, "ltc")
+    ]
+    assert plan == [
+        ("translucent", ["point"], [2], False),
+        ("ltc", ["quad", "environment"], [2], True),
+        ("scratches", ["quad", "point", "environment"], [3], False),
+        ("ltc", ["quad", "point", "environment"], [0, 1], False),
+        ("fermat", ["quad", "point", "environment"], [4], False),
+    ]
+    # a translucent mesh without any light still gets drawn (black, occluding what is behind it)
+    bare = scene.model_copy(update={"light": [], "mesh": scene.mesh[2:3]})
+    assert [(m, sorted(meshes), add) for m, _, meshes, add in pass_plan(bare, "forward")] == [
+        ("forward", [0], False),
+        ("forward", [], False),
+    ]
+
+
 def test_a_light_facing_away_warns(ctx):
     scene = sphere_scene("lambert", "quad", size=(16, 12))
     c1, c2, c4 = scene["light"][0]["corners"]

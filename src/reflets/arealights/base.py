@@ -79,30 +79,10 @@ def polygon_record(light: QuadLight | PolygonLight, mask: tuple[int, int, int] |
 
 
 def lobe_info(material) -> dict[str, object]:
-    """How the methods see a material: its Lambertian albedo, and its main specular lobe as a Phong (kind 1)
-    or Blinn-Phong (kind 2) lobe of exponent e (kind 0: no lobe). Microfacet and Ward roughness α map to the
-    usual equivalent Blinn-Phong (half-vector) exponent e = 2/α² − 2 (Walter et al. 2007); treating it as a
-    Phong exponent would make the lobe far too narrow (measured: −31 % highlight energy for `biased` on GGX
-    α = 0.1, −1.6 % as a Blinn-Phong lobe)."""
-    t = material.type
-    diffuse = (0.0, 0.0, 0.0)
-    kind, exponent = 0, 0.0
-    if t == "lambert":
-        diffuse = material.albedo
-    elif t in ("phong", "blinn_phong"):
-        diffuse, kind, exponent = material.kd, 1 if t == "phong" else 2, material.exponent
-    elif t == "lafortune":
-        diffuse = material.kd
-        lobe = max(material.lobes, key=lambda lb: lb.exponent)
-        kind, exponent = 1, lobe.exponent
-    elif t in ("ward", "microfacet"):
-        alpha = material.alpha if isinstance(material.alpha, float | int) else float(np.sqrt(np.prod(material.alpha)))
-        diffuse = material.kd if t == "ward" else material.diffuse
-        kind, exponent = 2, max(2.0 / alpha**2 - 2.0, 0.0)
-    elif t == "ashikhmin_shirley":
-        kind, exponent = 2, float(np.sqrt(material.nu * material.nv))
-    elif t == "measured":
-        kind, exponent = 2, 50.0
+    """The uniforms of how the methods see a material (``Material.lobe_summary``): its Lambertian albedo, and its
+    main specular lobe as a Phong (kind 1) or Blinn-Phong (kind 2) lobe of exponent e (kind 0: no lobe);
+    microfacet and Ward roughness α map to the equivalent Blinn-Phong exponent (``brdf.base.blinn_phong_exponent``)."""
+    diffuse, kind, exponent = material.lobe_summary()
     return {"u_lobe_diffuse": tuple(float(c) for c in diffuse), "u_lobe_kind": kind, "u_lobe_exponent": float(exponent)}
 
 

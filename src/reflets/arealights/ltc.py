@@ -74,8 +74,6 @@ LTC_PROGRAM = ProgramSpec(
     fragment=AREA_PROGRAM.fragment,
     flags=AREA_PROGRAM.flags | LTC_FLAGS | {"LTC_UNIFORM_LIGHTS", "LTC_VERTICES", "LTC_PROFILE", "LTC_HORIZON"},
 )
-#: the Lambertian parameter of each material type (split off and integrated exactly)
-DIFFUSE_PARAMETER = {"phong": "kd", "blinn_phong": "kd", "ward": "kd", "lafortune": "kd", "microfacet": "diffuse"}
 #: θ entries of the one-material tables fitted at prepare time
 INSTANCE_SIZE = 32
 #: scenes with up to this many polygon lights also get their records as a uniform array (faster to read on
@@ -88,21 +86,6 @@ def shipped_table(family: str) -> LtcTable:
     """The table shipped for a family (``reflets/data/ltc/<family>.npz``)."""
     with resources.files("reflets").joinpath("data", "ltc", f"{family}.npz").open("rb") as fh:
         return LtcTable.load(fh)
-
-
-def split_diffuse(material) -> tuple[tuple[float, float, float], object | None]:
-    """(Lambertian albedo, the material without it — None when nothing is left)."""
-    if material.type == "lambert":
-        return tuple(float(c) for c in material.albedo), None
-    name = DIFFUSE_PARAMETER.get(material.type)
-    if name is None:
-        return (0.0, 0.0, 0.0), material
-    diffuse = tuple(float(c) for c in getattr(material, name))
-    lobe = material.model_copy(update={name: (0.0, 0.0, 0.0)})
-    scale = getattr(lobe, "ks", None) if lobe.type != "lafortune" else None
-    if scale is not None and max(scale) == 0.0:
-        return diffuse, None
-    return diffuse, lobe
 
 
 @dataclass(frozen=True)
@@ -130,7 +113,7 @@ def _family_of(lobe) -> str | None:
 
 def choose_table(material) -> LtcChoice:
     """The table, roughness coordinate and factors for a material (rules in the module docstring)."""
-    diffuse, lobe = split_diffuse(material)
+    diffuse, lobe = material.lambertian_split()  # the Lambertian part is integrated exactly
     if lobe is None:
         return LtcChoice(None, 0.0, (0.0, 0.0, 0.0), diffuse, "none")
     family = _family_of(lobe)

@@ -82,6 +82,10 @@ class AshikhminShirley(HalfVectorLobeMixture, Material):
     rd: Reflectance = (0.5, 0.5, 0.5)
     nu: Exponent = 100.0
     nv: Exponent = 100.0
+
+    def lobe_summary(self):  # its diffuse term is not Lambertian: none split off
+        return (0.0, 0.0, 0.0), 2, float(np.sqrt(self.nu * self.nv))
+
     glsl = "reflets/brdf/glsl/ashikhmin_shirley.glsl"
 
     @property

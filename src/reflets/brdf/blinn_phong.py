@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 from pydantic import Field
@@ -52,6 +52,15 @@ class BlinnPhong(HalfVectorLobeMixture, Material):
     ks: Reflectance = (1.0, 1.0, 1.0)
     exponent: float = Field(default=100.0, ge=0, le=1e6, allow_inf_nan=False)
     normalized: bool = False
+    lambertian_field: ClassVar[str] = "kd"
+
+    def lambertian_split(self):
+        diffuse, rest = super().lambertian_split()
+        return diffuse, None if max(self.ks) == 0.0 else rest
+
+    def lobe_summary(self):
+        return tuple(float(c) for c in self.kd), 2, float(self.exponent)
+
     glsl = "reflets/brdf/glsl/blinn_phong.glsl"
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:

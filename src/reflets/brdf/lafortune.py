@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -76,6 +76,11 @@ class Lafortune(Material):
     type: Literal["lafortune"] = "lafortune"
     kd: Reflectance = (0.0, 0.0, 0.0)
     lobes: list[Lobe] = Field(default_factory=lambda: [Lobe()], min_length=1, max_length=MAX_LOBES)
+    lambertian_field: ClassVar[str] = "kd"
+
+    def lobe_summary(self):
+        return tuple(float(c) for c in self.kd), 1, float(max(lobe.exponent for lobe in self.lobes))
+
     glsl = "reflets/brdf/glsl/lafortune.glsl"
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:

@@ -21,6 +21,13 @@ class Lambert(Material):
 
     type: Literal["lambert"] = "lambert"
     albedo: Reflectance = (0.8, 0.8, 0.8)
+
+    def lambertian_split(self):
+        return tuple(float(c) for c in self.albedo), None
+
+    def lobe_summary(self):
+        return tuple(float(c) for c in self.albedo), 0, 0.0
+
     glsl = "reflets/brdf/glsl/lambert.glsl"
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:

@@ -375,6 +375,10 @@ class Measured(Material):
     file: Path
     scale: RGB = (1.0, 1.0, 1.0)
     precision: Literal["fp32", "fp16"] = "fp32"
+
+    def lobe_summary(self):  # a generic glossy lobe: the cone methods' sampling guess, not a fit
+        return (0.0, 0.0, 0.0), 2, 50.0
+
     glsl = "reflets/brdf/glsl/measured.glsl"
 
     def load(self) -> MerlTable:

@@ -11,7 +11,7 @@ surfaces"; Heitz 2014, "Understanding the masking-shadowing function in microfac
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -22,6 +22,7 @@ from .base import (
     RGB,
     Material,
     Reflectance,
+    blinn_phong_exponent,
     finish_sample,
     luminance,
     mix_pdf,
@@ -236,6 +237,11 @@ class Microfacet(Material):
     k: RGB | None = None
     masking: Literal["separable", "correlated"] = "separable"
     diffuse: Reflectance = (0.0, 0.0, 0.0)
+    lambertian_field: ClassVar[str] = "diffuse"
+
+    def lobe_summary(self):
+        return tuple(float(c) for c in self.diffuse), 2, blinn_phong_exponent(self.alpha)
+
     glsl = "reflets/brdf/glsl/microfacet.glsl"
 
     @model_validator(mode="after")

@@ -14,7 +14,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from ..fresnel import GOLD_ETA, GOLD_K, fresnel_conductor
-from .base import RGB, Material, Reflectance, register_material, upper
+from .base import LIGHT_TYPES, RGB, Material, Reflectance, register_material, upper
 
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 
@@ -74,6 +74,11 @@ class Mirror(Material):
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         f = np.broadcast_to(np.asarray(self.diffuse) / np.pi, np.shape(wo)[:-1] + (3,))
         return np.where(upper(wo, wi), f, 0.0)
+
+    def techniques(self, mesh) -> dict[str, str]:
+        """A reflector mesh: the ``fermat`` pass under every light (its non-specular part, then the exact
+        reflections of the other meshes); a plain mesh: its BRDF."""
+        return dict.fromkeys(LIGHT_TYPES, "fermat") if getattr(mesh, "reflector", False) else {}
 
     def uniforms(self) -> dict[str, object]:
         return {

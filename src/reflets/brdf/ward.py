@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field
@@ -11,6 +11,7 @@ from .base import (
     HalfVectorLobeMixture,
     Material,
     Reflectance,
+    blinn_phong_exponent,
     luminance,
     register_material,
     upper,
@@ -59,6 +60,15 @@ class Ward(HalfVectorLobeMixture, Material):
     ks: Reflectance = (1.0, 1.0, 1.0)
     alpha: Roughness | tuple[Roughness, Roughness] = 0.1
     variant: Literal["duer", "original"] = "duer"
+    lambertian_field: ClassVar[str] = "kd"
+
+    def lambertian_split(self):
+        diffuse, rest = super().lambertian_split()
+        return diffuse, None if max(self.ks) == 0.0 else rest
+
+    def lobe_summary(self):
+        return tuple(float(c) for c in self.kd), 2, blinn_phong_exponent(self.alpha)
+
     glsl = "reflets/brdf/glsl/ward.glsl"
 
     @property

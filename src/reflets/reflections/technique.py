@@ -207,6 +207,7 @@ class Fermat(Forward):
     name: ClassVar[str] = "fermat"
     summary: ClassVar[str] = "exact reflections in curved mirrors: per-vertex Fermat search on the GPU"
     Params: ClassVar = FermatParams
+    auto_order: ClassVar[int] = 3
 
     def prepare(self, scene: Scene) -> None:
         if not any(mesh.reflector for mesh in scene.mesh):

@@ -19,6 +19,13 @@ mirror reflector       ``fermat`` last: its non-specular part, then the reflecti
                        its BRDF — translucent meshes by their far-field BRDF, scratched ones by their base BRDF)
 =====================  ===========================================================================================
 
+The table is not written here: each material declares which technique takes each light type
+(``Material.techniques(mesh)``: ``Translucent`` → ``translucent`` for point / directional lights, ``Scratched`` →
+``scratches``, a reflector ``Mirror`` → ``fermat``, the BRDF library → nothing, i.e. the BRDF pass), and each
+technique where its pass goes and whether it takes one light per pass (``Technique.auto_order``,
+``one_light_per_pass``); ``pass_plan`` builds the passes from those declarations. A new material type with its
+own technique needs no change here.
+
 ``reflets info`` prints this table (``evaluation_table``); docs/architecture.md says how accurate each row is.
 The last pass also draws the emitters and the background.
 """
@@ -31,13 +38,10 @@ from typing import ClassVar, Literal
 import numpy as np
 from pydantic import Field
 
-from ..brdf.mirror import Mirror
 from ..gpu import FrameTimer, HDRTarget
-from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
-from ..scratches.material import Scratched
+from ..scene.model import PolygonLight, QuadLight, Scene
 from ..techniques.base import Technique, TechniqueParams, get_technique, register_technique
 from ..techniques.forward import Forward, GridSide, PassRole, check_target_size, samples_per_pixel_side
-from ..translucency.material import Translucent
 
 #: the method of a scene that names none
 DEFAULT_METHOD = "auto"
@@ -57,17 +61,48 @@ class AutoParams(TechniqueParams):
     env_grid: tuple[GridSide, GridSide] = Field((32, 16), description="environment map as nu × nv distant lights")
 
 
-def material_kind(scene: Scene, index: int) -> str:
-    """The pass that shades ``scene.mesh[index]``: brdf, translucent, scratched or reflector."""
-    mesh = scene.mesh[index]
-    material = scene.materials[mesh.material]
-    if mesh.reflector and isinstance(material, Mirror):
-        return "reflector"
-    if isinstance(material, Translucent):
-        return "translucent"
-    if isinstance(material, Scratched):
-        return "scratched"
-    return "brdf"
+def pass_plan(scene: Scene, area_method: str) -> list[tuple[str, Scene, frozenset[int], bool]]:
+    """(method, the scene that pass prepares — lit by the lights it takes —, the meshes it shades, additive) per
+    pass, in drawing order.
+
+    Each material says which technique shades it under each light type (``Material.techniques``); meshes with the
+    same answer form a group. A group's own technique draws it once (or once per light, for a technique with one
+    light view per pass), and the lights it leaves go to the area-light method on the material's BRDF, added
+    where that group's depth is equal. The BRDF pass (meshes that leave every light to it, the emitters, the
+    background) always runs; passes are ordered by ``Technique.auto_order`` (a pass that reflects the others,
+    ``fermat``, last)."""
+    groups: dict[tuple, set[int]] = {}
+    for i, mesh in enumerate(scene.mesh):
+        key = tuple(sorted(scene.materials[mesh.material].techniques(mesh).items()))
+        groups.setdefault(key, set()).add(i)
+    entries: list[tuple[float, str, Scene, frozenset[int], bool]] = []
+    for key, indices in groups.items():
+        if not key:
+            continue
+        mapping, meshes, drawn = dict(key), frozenset(indices), False
+        for method in sorted(set(mapping.values()), key=lambda m: get_technique(m).auto_order):
+            technique = get_technique(method)
+            lights = [light for light in scene.light if mapping.get(light.type) == method]
+            scenes = (
+                [_with_lights(scene, [light]) for light in lights]
+                if technique.one_light_per_pass
+                else [scene if len(lights) == len(scene.light) else _with_lights(scene, lights)]
+            )
+            for pass_scene in scenes:
+                entries.append((technique.auto_order, method, pass_scene, meshes, drawn))
+                drawn = True
+        rest = [light for light in scene.light if light.type not in mapping]
+        if rest or not drawn:
+            order = min(get_technique(m).auto_order for m in mapping.values()) + 0.5
+            entries.append((order, area_method, _with_lights(scene, rest), meshes, drawn))
+    entries.append((2, area_method, scene, frozenset(groups.get((), ())), False))
+    entries.sort(key=lambda entry: entry[0])  # stable: a group's passes keep their order
+    return [(method, pass_scene, meshes, additive) for _, method, pass_scene, meshes, additive in entries]
+
+
+def _with_lights(scene: Scene, lights: list) -> Scene:
+    """The scene lit by some of its lights only (such a pass never draws the background: the last does)."""
+    return scene.model_copy(update={"light": lights})
 
 
 def evaluation_table(area_method: str = "ltc") -> list[tuple[str, str, str]]:
@@ -123,26 +158,7 @@ class Auto(Technique):
     def prepare(self, scene: Scene) -> None:
         self.release()
         self.scene = scene
-        kinds = [material_kind(scene, i) for i in range(len(scene.mesh))]
-        owned = {k: frozenset(i for i, kind in enumerate(kinds) if kind == k) for k in set(kinds)}
-        delta = [light for light in scene.light if isinstance(light, PointLight | DirectionalLight)]
-        others = [light for light in scene.light if not isinstance(light, PointLight | DirectionalLight)]
-        area_method = self._area_method(scene)
-
-        plan: list[tuple[str, Scene, frozenset[int], bool]] = []  # (method, scene, meshes, additive)
-        if "translucent" in owned:
-            meshes = owned["translucent"]
-            for k, light in enumerate(delta):
-                plan.append(("translucent", self._with_lights(scene, [light]), meshes, k > 0))
-            if others:
-                plan.append((area_method, self._with_lights(scene, others), meshes, bool(delta)))
-        if "scratched" in owned:
-            plan.append(("scratches", scene, owned["scratched"], False))
-        # the BRDF pass always runs (with no mesh of its own, it still draws the emitters and the background)
-        plan.append((area_method, scene, owned.get("brdf", frozenset()), False))
-        if "reflector" in owned:
-            plan.append(("fermat", scene, owned["reflector"], False))
-
+        plan = pass_plan(scene, self._area_method(scene))
         p = self.params
         self.passes: list[tuple[str, Technique]] = []
         for k, (method, pass_scene, meshes, additive) in enumerate(plan):
@@ -163,11 +179,6 @@ class Auto(Technique):
         if masked and method != "forward" and not getattr(get_technique(method), "supports_masks", False):
             return "forward"
         return method
-
-    @staticmethod
-    def _with_lights(scene: Scene, lights: list) -> Scene:
-        """The scene lit by some of its lights only (such a pass never draws the background: the last does)."""
-        return scene.model_copy(update={"light": lights})
 
     @property
     def progressive(self) -> bool:  # type: ignore[override]

@@ -44,7 +44,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from ..brdf.ashikhmin_shirley import AshikhminShirley
-from ..brdf.base import RGB, Material, register_material
+from ..brdf.base import LIGHT_TYPES, RGB, Material, register_material
 from ..brdf.blinn_phong import BlinnPhong
 from ..brdf.lafortune import Lafortune
 from ..brdf.lambert import Lambert
@@ -268,6 +268,11 @@ class Scratched(Material):
 
     def pdf(self, wo, wi):
         return self.base.pdf(wo, wi)
+
+    def techniques(self, mesh) -> dict[str, str]:
+        """The ``scratches`` pass under every light: the scratch lobes (thickened delta lights, midpoint samples of
+        area lights, importance-sampled environment) over the base."""
+        return dict.fromkeys(LIGHT_TYPES, "scratches")
 
     def lighting_warnings(self, light_types: set[str]) -> list[str]:
         """A profile without a flat part has no mirror peak: a point or directional light reflects off its walls

@@ -68,6 +68,7 @@ class Scratches(Forward):
     progressive: ClassVar[bool] = True
     summary: ClassVar[str] = "scratched / brushed materials: layered SV-BRDF, cone importance sampling, progressive"
     Params: ClassVar = ScratchesParams
+    auto_order: ClassVar[int] = 1
 
     def prepare(self, scene) -> None:
         self._gpu = {}

@@ -49,6 +49,12 @@ class Technique:
     def prepare(self, scene: Scene) -> None:
         raise NotImplementedError
 
+    #: where the technique's pass goes in a frame that ``auto`` composes (lower first; the BRDF pass is 2, a pass
+    #: that reflects the others last)
+    auto_order: ClassVar[int] = 2
+    #: does one pass take one light (its own light view), so that ``auto`` runs one pass per light?
+    one_light_per_pass: ClassVar[bool] = False
+
     #: does the image converge over frames (Monte Carlo)? A persistent renderer then accumulates frames across
     #: calls while nothing changes
     progressive: ClassVar[bool] = False

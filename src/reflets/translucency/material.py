@@ -21,7 +21,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from ..brdf.base import RGB, Material, register_material, upper
+from ..brdf.base import LIGHT_TYPES, RGB, Material, register_material, upper
 from ..fresnel import fresnel_dielectric
 from .optics import beckmann_d, fresnel_transmittance
 
@@ -146,6 +146,11 @@ class Translucent(Material):
             fr = fresnel_dielectric(np.sum(wi * h, axis=-1), self.eta)
             spec = (fr * d * g / (4.0 * co * ci))[..., None]
         return np.where(ok, diffuse + spec, 0.0)
+
+    def techniques(self, mesh) -> dict[str, str]:
+        """Point and directional lights: the ``translucent`` pass (single + multiple scattering through the light's
+        own light view). Quad / polygon lights and the environment: this far-field BRDF in the BRDF pass."""
+        return dict.fromkeys(LIGHT_TYPES[:2], "translucent")
 
     def uniforms(self) -> dict[str, object]:
         return {

@@ -164,6 +164,8 @@ class Translucency(Forward):
     name: ClassVar[str] = "translucent"
     summary: ClassVar[str] = "translucent materials: single scattering + dipole / better dipole / normalised diffusion"
     Params: ClassVar = TranslucencyParams
+    auto_order: ClassVar[int] = 0
+    one_light_per_pass: ClassVar[bool] = True
 
     def prepare(self, scene: Scene) -> None:
         lights = [light for light in scene.light if isinstance(light, PointLight | DirectionalLight)]
