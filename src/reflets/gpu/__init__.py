@@ -2,7 +2,7 @@
 
 from .context import get_context, gl_info, is_software
 from .programs import ProgramSpec, get_program, set_uniforms
-from .targets import HDRTarget
+from .targets import HDRTarget, TargetCache
 from .timing import FrameTimer
 
 __all__ = [
@@ -13,5 +13,6 @@ __all__ = [
     "get_program",
     "set_uniforms",
     "HDRTarget",
+    "TargetCache",
     "FrameTimer",
 ]

@@ -37,3 +37,22 @@ class HDRTarget:
         self.ctx.detect_framebuffer(0).use()
         for obj in (self.fbo, self.color, self.depth):
             obj.release()
+
+
+class TargetCache:
+    """One technique's frame target, kept between frames of the same size: a frame loop then allocates nothing
+    (creating the float32 colour + depth framebuffer was most of a frame's fixed cost on a real GPU)."""
+
+    def __init__(self):
+        self.target: HDRTarget | None = None
+
+    def get(self, ctx, width: int, height: int) -> HDRTarget:
+        if self.target is None or self.target.size != (int(width), int(height)):
+            self.release()
+            self.target = HDRTarget(ctx, width, height)
+        return self.target
+
+    def release(self) -> None:
+        if self.target is not None:
+            self.target.release()
+            self.target = None

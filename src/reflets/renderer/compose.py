@@ -38,7 +38,7 @@ from typing import ClassVar, Literal
 import numpy as np
 from pydantic import Field
 
-from ..gpu import FrameTimer, HDRTarget
+from ..gpu import FrameTimer
 from ..scene.model import PolygonLight, QuadLight, Scene
 from ..techniques.base import Technique, TechniqueParams, get_technique, register_technique
 from ..techniques.forward import Forward, GridSide, PassRole, check_target_size, samples_per_pixel_side
@@ -207,21 +207,18 @@ class Auto(Technique):
         view, proj = self.final.camera_matrices(width, height)
         view_proj = proj @ view
         vp_bytes = view_proj.T.astype(np.float32).tobytes()
-        target = HDRTarget(self.ctx, width * s, height * s)
+        target = self._targets.get(self.ctx, width * s, height * s)
         total = None
-        try:
-            for frame in range(first_frame, first_frame + n_frames):
-                with self.timer.frame():
-                    for k, (_, technique) in enumerate(self.passes):
-                        start = time.perf_counter()
-                        technique._draw(target, view_proj, vp_bytes, frame, seed)
-                        if self.measure_passes:  # a finish per pass: only when asked (it costs a sync)
-                            self.ctx.finish()
-                            self.pass_ms[k] = 1e3 * (time.perf_counter() - start)
-                image = target.read()
-                total = image.astype(np.float64) if total is None else total + image
-        finally:
-            target.release()
+        for frame in range(first_frame, first_frame + n_frames):
+            with self.timer.frame():
+                for k, (_, technique) in enumerate(self.passes):
+                    start = time.perf_counter()
+                    technique._draw(target, view_proj, vp_bytes, frame, seed)
+                    if self.measure_passes:  # a finish per pass: only when asked (it costs a sync)
+                        self.ctx.finish()
+                        self.pass_ms[k] = 1e3 * (time.perf_counter() - start)
+            image = target.read()
+            total = image.astype(np.float64) if total is None else total + image
         self._supersample = s
         return total, n_frames
 
@@ -241,3 +238,4 @@ class Auto(Technique):
         for _, technique in getattr(self, "passes", []):
             technique.release()
         self.passes = []
+        self._targets.release()

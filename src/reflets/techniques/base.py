@@ -13,6 +13,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from ..errors import ArgumentError
+from ..gpu.targets import TargetCache
 from ..scene.model import Scene
 
 TECHNIQUES: dict[str, type[Technique]] = {}
@@ -45,6 +46,7 @@ class Technique:
             msg = err["msg"].removeprefix("Value error, ")
             raise ArgumentError(f"{msg}{hint} (parameters of '{self.name}': {allowed})", field=field) from None
         self.scene: Scene | None = None
+        self._targets = TargetCache()  # the frame target, kept while the size stays
 
     def prepare(self, scene: Scene) -> None:
         raise NotImplementedError
@@ -84,6 +86,7 @@ class Technique:
 
     def release(self) -> None:
         """Free GPU resources (the context itself stays)."""
+        self._targets.release()
 
 
 def register_technique(cls: type[Technique]) -> type[Technique]:

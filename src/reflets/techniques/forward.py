@@ -28,7 +28,7 @@ from pydantic import Field
 
 from ..equirect import rotation_y
 from ..errors import ArgumentError
-from ..gpu import FrameTimer, HDRTarget, ProgramSpec, get_program, set_uniforms
+from ..gpu import FrameTimer, ProgramSpec, get_program, set_uniforms
 from ..scene.environment import environment_grid, load_environment
 from ..scene.geometry import bounding_sphere, clip_planes_of_sphere, mesh_data
 from ..scene.lightmask import load_masks, mask_lookup, quad_uv
@@ -340,16 +340,13 @@ class Forward(Technique):
         view, proj = self.camera_matrices(width, height)
         view_proj = proj @ view
         vp_bytes = view_proj.T.astype(np.float32).tobytes()  # GLSL matrices are column-major
-        target = HDRTarget(ctx, width * s, height * s)
+        target = self._targets.get(ctx, width * s, height * s)
         total = None
-        try:
-            for frame in range(first_frame, first_frame + n_frames):
-                with self.timer.frame():
-                    self._draw(target, view_proj, vp_bytes, frame, seed)
-                image = target.read()  # read-back is not part of the frame time
-                total = image.astype(np.float64) if total is None else total + image
-        finally:
-            target.release()
+        for frame in range(first_frame, first_frame + n_frames):
+            with self.timer.frame():
+                self._draw(target, view_proj, vp_bytes, frame, seed)
+            image = target.read()  # read-back is not part of the frame time
+            total = image.astype(np.float64) if total is None else total + image
         self._supersample = s
         return total, n_frames
 
@@ -447,6 +444,7 @@ class Forward(Technique):
         for obj in getattr(self, "_objects", []):
             obj.release()
         self._objects = []
+        self._targets.release()
 
 
 def _aov(name: str, summary: str) -> type[Forward]:
