@@ -42,6 +42,8 @@ from ..scene.lightmask import quad_uv
 from ..scene.meshdata import MeshData
 from ..scene.model import CylinderMesh, PlaneMesh, PolygonLight, QuadLight, Scene, SphereMesh, TorusMesh
 from ..scene.surfaces import SampledSurface
+from ..scratches.lobes import LOBE_FLAGS, ScratchLobes
+from ..scratches.material import Scratched
 from ..techniques.base import register_technique
 from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams, polygon_normal
 from .scene import canonical_surface
@@ -55,7 +57,7 @@ REFLECTED_PROGRAM = ProgramSpec(
     "fermat_reflected",
     vertex=SHADERS + "reflected.vert",
     fragment=SHADERS + "reflected.frag",
-    flags=LIGHT_FLAGS | SOLVER_FLAGS | {"REFLECTED_EMITTER", "EMITTER_MASK"},
+    flags=LIGHT_FLAGS | SOLVER_FLAGS | LOBE_FLAGS | {"REFLECTED_EMITTER", "EMITTER_MASK", "SCRATCHED"},
     constants=glsl_constants(),
 )
 COMPOSITE_PROGRAM = ProgramSpec(
@@ -216,6 +218,7 @@ class Fermat(Forward):
             )
         super().prepare(scene)
         ctx = self.ctx
+        self._lobes = ScratchLobes(ctx, scene)  # reflected scratched meshes: their lobes, default sampling
         self._reflectors = [
             reflector_of(scene, i, self.params.sampled) for i, mesh in enumerate(scene.mesh) if mesh.reflector
         ]
@@ -290,18 +293,25 @@ class Fermat(Forward):
         solver = self._solver_flags(reflector)
         draws = []
         for data, material in self._reflected_meshes:
+            scratched = isinstance(material, Scratched)  # shaded with its lobes, as in direct view
             program = get_program(
                 ctx,
                 REFLECTED_PROGRAM,
                 slots={"BRDF": material.glsl},
                 REFLECTED_EMITTER=0,
                 EMITTER_MASK=0,
+                SCRATCHED=int(scratched),
                 **self._light_flags,
                 **material.flags(),
+                **(self._lobes.flags(material) if scratched else {}),
                 **solver,
             )
             uniforms = {**material.uniforms(), **reflector.uniforms()}
-            draws.append((program, self.mesh_vertex_array(program, data), uniforms, material.textures(ctx)))
+            textures = material.textures(ctx)
+            if scratched:
+                uniforms.update(self._lobes.uniforms(material))
+                textures = {**textures, **self._lobes.textures(material)}
+            draws.append((program, self.mesh_vertex_array(program, data), uniforms, textures))
         masks = {id(light): mask for _, _, light, mask in self._emitters}  # the forward pass's mask textures
         for data, light in self._reflected_emitters:
             mask = masks.get(id(light))
@@ -376,6 +386,7 @@ class Fermat(Forward):
                 "u_gbuffer_normal": GBUFFER_UNITS[1],
                 "u_reflector_id": reflector_id,
                 "u_hidden_tolerance": self.params.hidden_tolerance * size,
+                **ScratchLobes.frame_uniforms(frame, seed),  # reflected scratched meshes sample per frame
             }
             for program, vao, uniforms, textures in draws:
                 samplers = {}
@@ -413,6 +424,11 @@ class Fermat(Forward):
             ctx.disable(ctx.BLEND)
             ctx.enable(ctx.DEPTH_TEST)
         ctx.disable(ctx.DEPTH_TEST)
+
+    def release(self) -> None:
+        if hasattr(self, "_lobes"):
+            self._lobes.release()
+        super().release()
 
     # ------------------------------------------------------------------ the solver alone
     def reflection_points(self, vertices: np.ndarray, eyes=None, reflector: int = 0) -> dict[str, np.ndarray]:

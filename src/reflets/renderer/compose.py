@@ -16,7 +16,7 @@ translucent            ``translucent`` once per point / directional light, each 
 scratched              ``scratches``: point / directional lights thickened, quad / polygon lights as their midpoint
                        samples thickened, the environment importance-sampled; progressive
 mirror reflector       ``fermat`` last: its non-specular part, then the reflections of every other mesh (shaded with
-                       its BRDF — translucent meshes by their far-field BRDF, scratched ones by their base BRDF)
+                       its BRDF — translucent meshes by their far-field BRDF, scratched ones with their scratch lobes)
 =====================  ===========================================================================================
 
 The table is not written here: each material declares which technique takes each light type

@@ -3,10 +3,19 @@
 // reflection point must not be behind the visible reflector surface (reflections on the hidden side), and the
 // object point must lie in front of the mirror there (no reflection through the reflector) — then shading with
 // the eye at the reflection point P (view-dependent materials look right in the mirror). REFLECTED_EMITTER: an
-// area light.
+// area light. SCRATCHED: a scratched material, shaded as the scratches pass shades it (its lobes, with the α maps
+// filtered by the footprint of the mirror pixel that shows them).
 #if !REFLECTED_EMITTER
 #include BRDF
+// (#include inlines a file once, whatever the #if around it: lights.glsl is included in one place)
+#if SCRATCHED
+#define brdf_eval base_brdf_eval
+#endif
 #include "reflets/techniques/shaders/lights.glsl"
+#if SCRATCHED
+#undef brdf_eval
+#include "reflets/scratches/shaders/scratch_lobes.glsl"
+#endif
 #endif
 
 in vec3 v_position;
@@ -50,6 +59,10 @@ void main() {
     if (dot(n, to_eye) < 0.0) n = -n;  // two-sided surfaces, as seen from P
     mat3 frame = shading_frame(n, v_tangent);
     vec3 wo = transpose(frame) * normalize(to_eye);
+#if SCRATCHED
+    f_color = vec4(scratched_radiance(v_position, frame, wo, v_uv, uvec2(gl_FragCoord.xy)), 1.0);
+#else
     f_color = vec4(direct_lighting(v_position, frame, wo), 1.0);
+#endif
 #endif
 }

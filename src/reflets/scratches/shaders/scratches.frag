@@ -1,14 +1,10 @@
-// Provides the scratches shading pass for a scratched material (twin of reflets/scratches/shading.py):
-//   L = max(0, 1 − ᾱ) · L_base + Σ_k α_k / max(ᾱ, 1) · L_k   (eq 3.4, ᾱ = Σ α_k, layers with α_k < 1e-6 culled)
-// L_base: the base BRDF (slot BRDF's base_brdf_eval) lit by lights.glsl as in the forward pass. L_k: layer k's
-// scratch BRDF on its reflection half-cone — the environment importance-sampled with the table's CDF (eq 3.5,
-// Fresnel weight ρ_s/ρ_m via the exact bin pdf), S_ENV_SAMPLES samples per frame split over the layers ∝ α_k
-// (stratified); point / directional lights thickened (f_H, §3.7) with culling, S_LIGHT_SAMPLES per live layer.
-// Every loop is short (llvmpipe ends an invocation after 65,535 loop iterations): frames accumulate on the CPU.
+// Provides the scratches shading pass for a scratched material: scratch_lobes.glsl's scratched_radiance at each
+// fragment, seen from the camera.
 #include BRDF
 #define brdf_eval base_brdf_eval
 #include "reflets/techniques/shaders/lights.glsl"
 #undef brdf_eval
+#include "reflets/scratches/shaders/scratch_lobes.glsl"
 
 in vec3 v_position;
 in vec3 v_normal;
@@ -16,87 +12,8 @@ in vec4 v_tangent;
 in vec2 v_uv;
 
 uniform vec3 u_eye;
-uniform uint u_frame;
-uniform uint u_seed;
-uniform sampler2D s_table_a;  // (ρ_s(0).rgb, ρ_m) at [φ_out row, φ_in column]
-uniform sampler2D s_table_b;  // (γ.rgb, pdf)
-uniform sampler2D s_cdf;      // CDF of each φ_out row at the S_TABLE + 1 bin edges
-uniform vec2 s_dir[S_LAYERS];  // (cos Θ_k, sin Θ_k): u_k in the tangent frame
-uniform float s_thickness;     // H in radians
-#if S_CONSTANT_ALPHA
-uniform float s_coverage;
-#else
-uniform sampler2DArray s_alpha;  // α of layers 4p..4p+3 in layer p, mip-mapped
-#endif
-#if S_ENV_SAMPLES > 0
-uniform sampler2D s_env;
-uniform mat3 s_env_from_world;
-#endif
 
 out vec4 f_color;
-
-const float HALF_PI = 1.57079632679489661923;
-const float ALPHA_CULL = 1e-6;
-
-float g_alpha[S_LAYERS];
-
-int phi_bin(float phi) {
-    return clamp(int(floor((phi + HALF_PI) * float(S_TABLE) / PI)), 0, S_TABLE - 1);
-}
-
-// ρ_s(θ_o) = F_γ ρ_m + (1 − F_γ) ρ_s(0) at bins (b, j); x = 2|θ_o|/π. Also returns the bin's pdf.
-vec3 rho_s(int b, int j, float x, out float pdf) {
-    vec4 a = texelFetch(s_table_a, ivec2(j, b), 0);
-    vec4 g = texelFetch(s_table_b, ivec2(j, b), 0);
-    vec3 F = pow(vec3(max(x, 1e-30)), g.rgb);
-    pdf = g.a;
-    return F * a.a + (1.0 - F) * a.rgb;
-}
-
-// (θ, φ) of a local direction in layer k's cone frame.
-vec2 cone_angles(vec3 w, vec2 d) {
-    float wu = d.x * w.x + d.y * w.y;
-    float wv = -d.y * w.x + d.x * w.y;
-    return vec2(asin(clamp(wu, -1.0, 1.0)), atan(wv, w.z));
-}
-
-vec3 from_cone(float theta, float phi, vec2 d) {
-    float st = sin(theta), ct = cos(theta);
-    float sv = ct * sin(phi), cv = ct * cos(phi);
-    return vec3(st * d.x - sv * d.y, st * d.y + sv * d.x, cv);
-}
-
-#if N_POINT > 0 || N_DIR > 0 || N_AREA > 0
-// Σ_k α_k/max(ᾱ,1) L_k for one thickened light of irradiance E from local direction wl.
-vec3 thick_light(vec3 wo, vec3 wl, vec3 E, float norm, inout uint rng) {
-    float H = s_thickness;
-    vec3 sum = vec3(0.0);
-    for (int k = 0; k < S_LAYERS; ++k) {
-        if (g_alpha[k] <= 0.0) continue;
-        vec2 o = cone_angles(wo, s_dir[k]);
-        vec2 l = cone_angles(wl, s_dir[k]);
-        float delta = l.x + o.x;
-        if (abs(delta) >= H) continue;  // the cone misses the light's support (the document's culling)
-        float half_width = sqrt(H * H - delta * delta);
-        float lo = max(l.y - half_width, -HALF_PI), hi = min(l.y + half_width, HALF_PI);
-        if (hi <= lo) continue;
-        int b = phi_bin(o.y);
-        float x = 2.0 * abs(o.x) / PI;
-        float c = 3.0 / (PI * H * H * max(cos(l.x), sin(H)));
-        float xi = rng_next(rng);
-        vec3 acc = vec3(0.0);
-        for (int i = 0; i < S_LIGHT_SAMPLES; ++i) {
-            float phi = lo + (float(i) + xi) / float(S_LIGHT_SAMPLES) * (hi - lo);
-            float dp = phi - l.y;
-            float f = max(0.0, 1.0 - (delta * delta + dp * dp) / (H * H));
-            float pdf;
-            acc += rho_s(b, phi_bin(phi), x, pdf) * (cos(phi) * f * f);
-        }
-        sum += (g_alpha[k] / norm) * acc * ((hi - lo) / float(S_LIGHT_SAMPLES) * c);
-    }
-    return sum * E;
-}
-#endif
 
 void main() {
     vec3 n = normalize(v_normal);
@@ -109,94 +26,7 @@ void main() {
 #elif OUTPUT == 3
     f_color = vec4(v_uv, 0.0, 1.0);
 #else
-    // α of every layer first, outside any branch (the mip level comes from the pixel footprint's derivatives)
-    float abar = 0.0;
-    int last = 0;
-    for (int p = 0; p < (S_LAYERS + 3) / 4; ++p) {
-#if S_CONSTANT_ALPHA
-        vec4 a4 = vec4(s_coverage);
-#else
-        vec4 a4 = texture(s_alpha, vec3(v_uv, float(p)));
-#endif
-        for (int c = 0; c < 4; ++c) {
-            int k = 4 * p + c;
-            if (k >= S_LAYERS) break;
-            float a = a4[c] >= ALPHA_CULL ? a4[c] : 0.0;
-            g_alpha[k] = a;
-            abar += a;
-            if (a > 0.0) last = k;
-        }
-    }
-    float norm = max(abar, 1.0);
     vec3 wo = transpose(frame) * normalize(u_eye - v_position);
-    vec3 sum = max(0.0, 1.0 - abar) * direct_lighting(v_position, frame, wo);
-    if (wo.z > 0.0 && abar > 0.0) {
-        uint rng = rng_seed(uvec2(gl_FragCoord.xy), u_frame, u_seed);
-#if N_POINT > 0
-        for (int i = 0; i < N_POINT; ++i) {
-            vec3 d = point_data[2 * i].xyz - v_position;
-            float r2 = dot(d, d);
-            sum += thick_light(wo, transpose(frame) * (d * inversesqrt(r2)), point_data[2 * i + 1].rgb / r2, norm, rng);
-        }
-#endif
-#if N_DIR > 0
-        for (int i = 0; i < N_DIR; ++i) {
-            sum += thick_light(wo, transpose(frame) * dir_data[2 * i].xyz, dir_data[2 * i + 1].rgb, norm, rng);
-        }
-#endif
-#if N_AREA > 0
-        // quad / polygon lights: each midpoint sample of the emitter (the forward pass's area_samples² per quad)
-        // as a thickened light of irradiance L cosθ_y dA / r² — the lobes see the emitter as that many small
-        // sources, smoothed by the thickening (documented approximation; converges as area_samples grows)
-        for (int i = 0; i < N_AREA; ++i) {
-            vec4 p = area_data[3 * i];
-            vec4 nl = area_data[3 * i + 1];
-            vec3 d = p.xyz - v_position;
-            float r2 = dot(d, d);
-            vec3 wi = d * inversesqrt(r2);
-            float cos_y = -dot(nl.xyz, wi);
-            if (nl.w > 0.5) cos_y = abs(cos_y);
-            if (cos_y <= 0.0) continue;
-            sum += thick_light(wo, transpose(frame) * wi, area_data[3 * i + 2].rgb * (cos_y * p.w / r2), norm, rng);
-        }
-#endif
-#if S_ENV_SAMPLES > 0
-        vec3 env = vec3(0.0);
-        float xi = rng_next(rng);
-        for (int i = 0; i < S_ENV_SAMPLES; ++i) {
-            // the layer: stratified over the α-weighted layers (the budget split ∝ α_k)
-            float target = (float(i) + xi) / float(S_ENV_SAMPLES) * abar;
-            int k = 0;
-            float cum = 0.0;
-            for (int m = 0; m < S_LAYERS; ++m) {
-                cum += g_alpha[m];
-                if (cum <= target) k = m + 1;
-            }
-            k = min(k, last);
-            vec2 d = s_dir[k];
-            vec2 o = cone_angles(wo, d);
-            int b = phi_bin(o.y);
-            // φ_in by exact inversion of row b's piecewise-linear CDF: binary search for max j with cdf[j] ≤ u
-            float u = rng_next(rng);
-            int lo = 0, hi = S_TABLE;
-            for (int it = 0; it < S_LOG2; ++it) {
-                if (hi - lo <= 1) break;
-                int mid = (lo + hi) >> 1;
-                if (texelFetch(s_cdf, ivec2(mid, b), 0).r <= u) lo = mid; else hi = mid;
-            }
-            float c0 = texelFetch(s_cdf, ivec2(lo, b), 0).r, c1 = texelFetch(s_cdf, ivec2(lo + 1, b), 0).r;
-            float frac = c1 > c0 ? clamp((u - c0) / (c1 - c0), 0.0, 1.0) : 0.5;
-            float phi = -HALF_PI + (float(lo) + frac) * PI / float(S_TABLE);
-            float pdf;
-            vec3 rho = rho_s(b, lo, 2.0 * abs(o.x) / PI, pdf);
-            if (pdf <= 0.0) continue;
-            vec3 wi = frame * from_cone(-o.x, phi, d);
-            vec3 L = textureLod(s_env, equirect_uv(s_env_from_world * wi), 0.0).rgb;
-            env += rho * (cos(phi) / pdf) * L;
-        }
-        sum += env * (abar / norm / float(S_ENV_SAMPLES));
-#endif
-    }
-    f_color = vec4(sum, 1.0);
+    f_color = vec4(scratched_radiance(v_position, frame, wo, v_uv, uvec2(gl_FragCoord.xy)), 1.0);
 #endif
 }
