@@ -44,9 +44,35 @@ def test_volumetric_reference_is_deterministic_and_rejects_what_it_cannot_render
     a = render_volumetric(scene, spp=1, seed=4, size=(16, 12), progress=False)
     b = render_volumetric(scene, spp=1, seed=4, size=(16, 12), progress=False)
     np.testing.assert_array_equal(a.image, b.image)
-    with pytest.raises(ArgumentError, match="exactly one point or directional light"):
+    with pytest.raises(ArgumentError, match="exactly one point, directional, quad or polygon light"):
         two = [{"type": "point", "position": [2, 3, 2], "intensity": [1, 1, 1]}] * 2
         render_volumetric(sphere_scene(lights=two), spp=1, progress=False)
+
+
+@pytest.mark.parametrize("eta", [1.0, 1.3])
+def test_a_tiny_quad_light_is_the_point_light_at_its_centre(eta):
+    """Quad lights: each scattering vertex connects to a uniform point y of the emitter with intensity L A cos θ_y
+    (the point's samples come from their own stream, so the walks are the same as with a point light). A quad of
+    side 0.02 facing the unit sphere from 20 units (cos θ_y ≥ 0.9987 towards it) lights it as a point light of
+    intensity L A at its centre."""
+    side, height, radiance = 0.02, 20.0, 1e6
+    h = side / 2
+    quad = {
+        "type": "quad",
+        "corners": [[-h, height, -h], [h, height, -h], [-h, height, h]],  # emitting downwards, towards the sphere
+        "radiance": [radiance, 0.5 * radiance, 0.25 * radiance],
+    }
+    point = {"type": "point", "position": [0, height, 0], "intensity": [radiance * side**2 * s for s in (1, 0.5, 0.25)]}
+    kwargs = {"spp": 2, "seed": 7, "size": (20, 15), "progress": False}
+    by_quad = render_volumetric(sphere_scene(eta, lights=[quad]), **kwargs)
+    by_point = render_volumetric(sphere_scene(eta, lights=[point]), **kwargs)
+    m = by_point.mask
+    assert m.sum() > 100 and by_point.image[m].mean() > 0.0
+    ratio = by_quad.image[m].sum(axis=0) / by_point.image[m].sum(axis=0)
+    np.testing.assert_allclose(ratio, 1.0, atol=3e-3)
+    # the one-sided emitter turned away lights nothing
+    away = {**quad, "corners": [[-h, height, -h], [-h, height, h], [h, height, -h]]}
+    assert render_volumetric(sphere_scene(eta, lights=[away]), **kwargs).image.max() == 0.0
 
 
 @pytest.mark.slow
@@ -153,10 +179,10 @@ def test_manifold_connection_finds_the_refracted_light_paths_a_brute_force_searc
     v = rng.normal(size=(150, 3))
     u = v / np.linalg.norm(v, axis=1, keepdims=True) * (1 - 0.2 * rng.random((150, 1)))
     light = np.array([2.0, 3.0, 2.0])
-    _, factor, _, valid = _refracted_connection(geometry, u, 1.0, light_pos=light)
+    _, factor, _, valid, _ = _refracted_connection(geometry, u, 1.0, light_pos=light)
     assert valid.mean() > 0.99
     np.testing.assert_allclose(factor[valid] * np.sum((u[valid] - light) ** 2, axis=1), 1.0, rtol=2e-3)
-    _, _, _, valid = _refracted_connection(geometry, u, 1.3, light_pos=light)
+    _, _, _, valid, _ = _refracted_connection(geometry, u, 1.3, light_pos=light)
     axis = -light / np.linalg.norm(light)
     a, b = np.linalg.svd(np.eye(3) - np.outer(axis, axis))[0][:, :2].T
     half = np.arcsin(1 / np.linalg.norm(light))

@@ -39,8 +39,9 @@ def reference(
     spp : samples per pixel; seed : random seed (same seed, same image)
     engine : "numpy" (ours) or "mitsuba" (Mitsuba 3 ``scalar_rgb`` with its ``direct`` integrator; always
         with shadows and box pixel filtering; needs the ``reference`` extra) or "volumetric" (path tracing of a
-        translucent medium inside its smooth boundary, one point or directional light: the ``translucent``
-        technique's single + multiple scattering, reflets.reference.volumetric; pixel centres, with shadows)
+        translucent medium inside its smooth boundary, one point, directional, quad or polygon light: the
+        ``translucent`` technique's single + multiple scattering, reflets.reference.volumetric; pixel centres, with
+        shadows)
     workers : processes sharing the samples (volumetric engine)
     visibility : shadows on (ray-cast occlusion) or off (the area-light document's unoccluded setting)
     pixel : "center" samples the pixel centre like the GPU renderer; "box" averages over the pixel

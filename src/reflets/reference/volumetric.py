@@ -149,7 +149,7 @@ class VolumetricImage:
 
 def _check_volumetric_scene(scene):
     from ..errors import ArgumentError
-    from ..scene.model import DirectionalLight, PointLight
+    from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight
     from ..translucency.material import Translucent
 
     materials = {mesh.material for mesh in scene.mesh}
@@ -159,10 +159,59 @@ def _check_volumetric_scene(scene):
             field="mesh.material",
         )
     material = scene.materials[next(iter(materials))]
-    lights = [light for light in scene.light if isinstance(light, PointLight | DirectionalLight)]
+    kinds = PointLight | DirectionalLight | QuadLight | PolygonLight
+    lights = [light for light in scene.light if isinstance(light, kinds)]
     if len(scene.light) != 1 or not lights:
-        raise ArgumentError("the volumetric reference needs exactly one point or directional light", field="light")
+        raise ArgumentError(
+            "the volumetric reference needs exactly one point, directional, quad or polygon light", field="light"
+        )
+    if getattr(lights[0], "mask", None) is not None:
+        raise ArgumentError("the volumetric reference takes quad lights without a mask", field="light[0].mask")
     return material, lights[0]
+
+
+class _EmitterSampler:
+    """Uniform points on a quad or polygon light (its fan triangles by area): the light reaches a scattering
+    vertex as a point light at the sampled point y of intensity L A cos θ_y towards it (θ_y from the emitting
+    side's normal; both sides for a two-sided light), i.e. the area integral estimated with pdf 1/A."""
+
+    def __init__(self, light, epsilon: float):
+        poly = np.asarray(light.polygon(), np.float64)
+        normal = np.sum(np.cross(poly, np.roll(poly, -1, axis=0)), axis=0)  # Newell: counter-clockwise = front
+        self.normal = normal / np.linalg.norm(normal)
+        self.tri = np.stack([np.repeat(poly[:1], len(poly) - 2, axis=0), poly[1:-1], poly[2:]], axis=1)
+        edges = np.cross(self.tri[:, 1] - self.tri[:, 0], self.tri[:, 2] - self.tri[:, 0])
+        areas = 0.5 * np.linalg.norm(edges, axis=1)
+        self.area = float(areas.sum())
+        self.cdf = np.cumsum(areas) / self.area
+        self.two_sided = bool(light.two_sided)
+        self.radiance = np.asarray(light.radiance, np.float64)
+        self.offset = epsilon * self.normal  # traces leave the emitter's plane on its front side
+
+    def sample(self, rng, n: int) -> np.ndarray:
+        k = np.minimum(np.searchsorted(self.cdf, rng.random(n), side="right"), len(self.tri) - 1)
+        a, b = rng.random(n), rng.random(n)
+        flip = a + b > 1.0
+        a, b = np.where(flip, 1.0 - a, a), np.where(flip, 1.0 - b, b)
+        tri = self.tri[k]
+        return tri[:, 0] + a[:, None] * (tri[:, 1] - tri[:, 0]) + b[:, None] * (tri[:, 2] - tri[:, 0])
+
+    def cosine(self, leaving: np.ndarray) -> np.ndarray:
+        """cos θ_y of light leaving the emitter along unit directions ``leaving`` (0 behind a one-sided light)."""
+        c = leaving @ self.normal
+        return np.abs(c) if self.two_sided else np.maximum(c, 0.0)
+
+
+def _emitter(light, geometry) -> _EmitterSampler | None:
+    from ..scene.model import PolygonLight, QuadLight
+
+    return _EmitterSampler(light, geometry.epsilon) if isinstance(light, QuadLight | PolygonLight) else None
+
+
+def _light_stream(rng):
+    """A stream for the emitter's points, independent of the walks' (spawned from the same seed: the walks draw
+    the same numbers whatever the light)."""
+    return np.random.default_rng(rng.bit_generator.seed_seq.spawn(1)[0])
 
 
 def _inside_length(geometry, origins, directions, distances, max_crossings: int = 8) -> np.ndarray:
@@ -202,7 +251,8 @@ def render_volumetric(
     workers: int = 1,
 ) -> VolumetricImage:
     """Volumetric path tracing of a homogeneous translucent medium inside the scene's closed meshes, lit by one
-    point or directional light: the ground truth of the ``translucent`` technique (all orders of scattering).
+    point, directional, quad or polygon light (an emitter's points sampled uniformly over its area, each a point
+    light of intensity L A cos θ_y): the ground truth of the ``translucent`` technique (all orders of scattering).
 
     Index-matched boundary (``eta = 1``): camera rays enter straight, every scattering vertex connects to
     the light with a shadow ray whose transmittance counts the medium crossed on the way (re-entries included,
@@ -248,7 +298,7 @@ class _VolumetricJob:
         from .geometry import MESHES, SceneGeometry
 
         material, self.light = _check_volumetric_scene(scene)
-        self.geometry = SceneGeometry(scene)
+        self.geometry = SceneGeometry(scene.model_copy(update={"light": []}))  # the medium's boundary only
         self.medium = material.medium()
         self.scale = material.mm_per_unit  # σ per mm → per scene unit
         self.orders = orders
@@ -279,9 +329,12 @@ class _VolumetricJob:
         total = np.zeros((len(pix), 3))
         total2 = np.zeros((len(pix), 3))
         directional = isinstance(light, DirectionalLight)
+        emitter, light_rng = _emitter(light, geometry), _light_stream(rng)
         if directional:
             to_light = -np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
             power = np.asarray(light.irradiance, np.float64)
+        elif emitter is not None:
+            power = emitter.radiance * emitter.area
         else:
             light_pos = np.asarray(light.position, np.float64)
             power = np.asarray(light.intensity, np.float64)
@@ -311,10 +364,13 @@ class _VolumetricJob:
                         dist = np.full(stay.size, np.inf)
                         incident = np.broadcast_to(power[c], stay.size)
                     else:
-                        v = light_pos - pos[stay]
+                        target = light_pos if emitter is None else emitter.sample(light_rng, stay.size)
+                        v = target - pos[stay]
                         dist = np.linalg.norm(v, axis=1)
                         wl = v / dist[:, None]
                         incident = power[c] / (dist * dist)
+                        if emitter is not None:
+                            incident = incident * emitter.cosine(-wl)
                     inside = _inside_length(geometry, pos[stay], np.ascontiguousarray(wl), dist)
                     phase = henyey_greenstein(np.sum(d[stay] * wl, axis=1), medium.g)
                     acc[stay] += wgt[stay] * phase * incident * np.exp(-sigma_t * inside)
@@ -434,7 +490,8 @@ def _refracted_connection(geometry, u, eta: float, *, light_pos=None, travel=Non
     it; Newton on the miss distance, with the Jacobian J of that map by finite differences of the same traces.
     At the solution the beam's cross-section at u is |det J| per unit of the parameters, so the flux density
     normal to the refracted beam at u is power × F_T(y) / |det J| (I/d² without refraction). Returns (travel
-    direction t at u, F_T/|det J|, distance |u − y| inside, valid); not valid: no convergence, grazing or
+    direction t at u, F_T/|det J|, distance |u − y| inside, valid, the light ray's direction where it leaves the
+    light); not valid: no convergence, grazing or
     missing traces, or the boundary between y and u (light entering elsewhere, e.g. through a thin part and out
     again, is not followed)."""
     from ..brdf.base import orthonormal_basis
@@ -460,6 +517,7 @@ def _refracted_connection(geometry, u, eta: float, *, light_pos=None, travel=Non
     has_prev = np.zeros(n, dtype=bool)
     halvings = np.zeros(n, dtype=np.int64)
     t_out = np.zeros((n, 3))
+    start_dir = np.zeros((n, 3))
     factor = np.zeros(n)
     inside = np.zeros(n)
     valid = np.zeros(n, dtype=bool)
@@ -519,6 +577,7 @@ def _refracted_connection(geometry, u, eta: float, *, light_pos=None, travel=Non
             a = active[done]
             cos_y = -np.sum(dk[:m][done] * nrm[:m][done], axis=1)
             t_out[a] = t0[done]
+            start_dir[a] = dk[:m][done]
             factor[a] = fresnel_transmittance(cos_y, eta) / np.abs(det[done])
             inside[a] = np.linalg.norm(uu[done] - y[0][done], axis=1)
             valid[a] = True
@@ -546,7 +605,7 @@ def _refracted_connection(geometry, u, eta: float, *, light_pos=None, travel=Non
         hits = geometry.intersect(start + t_out[idx] * eps_ray, t_out[idx])
         blocked = (hits.kind >= 0) & (hits.t + eps_ray < inside[idx] - 10 * eps_ray)
         valid[idx[blocked]] = False
-    return t_out, factor, inside, valid
+    return t_out, factor, inside, valid, start_dir
 
 
 @dataclass
@@ -614,10 +673,13 @@ def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits,
     sigma_t = np.asarray(medium.sigma_t, np.float64)[channel] * scale
     albedo = np.asarray(medium.albedo, np.float64)[channel]
     eps = geometry.epsilon
+    emitter, light_rng = _emitter(light, geometry), _light_stream(rng)
     if isinstance(light, DirectionalLight):
         travel = np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
         connect = {"travel": travel}
         power = np.asarray(light.irradiance, np.float64)[channel]
+    elif emitter is not None:
+        power = (emitter.radiance * emitter.area)[channel]
     else:
         connect = {"light_pos": np.asarray(light.position, np.float64)}
         power = np.asarray(light.intensity, np.float64)[channel]
@@ -646,7 +708,11 @@ def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits,
             pos[sc] += d[sc] * t_free[scatter, None]
             w[sc] *= albedo[sc]
             events[sc] += 1
-            t_light, factor, length, valid = _refracted_connection(geometry, pos[sc], eta, **connect)
+            if emitter is not None:  # a point of the emitter per vertex, just off its plane
+                connect = {"light_pos": emitter.sample(light_rng, sc.size) + emitter.offset}
+            t_light, factor, length, valid, leaving = _refracted_connection(geometry, pos[sc], eta, **connect)
+            if emitter is not None:
+                factor = factor * emitter.cosine(leaving)
             phase = henyey_greenstein(-np.sum(d[sc] * t_light, axis=1), medium.g)
             contribution = w[sc] * phase * power[sc] * factor * np.exp(-sigma_t[sc] * length)
             acc[sc] += np.where(valid, contribution, 0.0)
@@ -675,6 +741,6 @@ def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits,
             w[b[np.where(reflect, side <= 0.0, side >= 0.0)]] = 0.0  # shading normal against the geometry
             d[b] = new
             inside[b[~reflect]] = ~from_inside[~reflect]
-        w[idx[~has & ~scatter]] = 0.0  # escaped (a point or directional light is never hit)
+        w[idx[~has & ~scatter]] = 0.0  # escaped (next-event estimation only: a light hit is not counted)
         idx = idx[w[idx] > 0.0]
     return acc
