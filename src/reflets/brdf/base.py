@@ -79,12 +79,16 @@ class Material(BaseModel):
     #: the field holding the material's Lambertian albedo, if it has one (area-light methods integrate that part
     #: exactly and the rest by their own rule)
     lambertian_field: ClassVar[str | None] = None
+    #: the field scaling the rest (a zero there leaves nothing once the Lambertian part is split off)
+    specular_field: ClassVar[str | None] = None
 
     def lambertian_split(self) -> tuple[tuple[float, float, float], Material | None]:
         """(the Lambertian albedo, the material without it — None when nothing is left)."""
         if self.lambertian_field is None:
             return (0.0, 0.0, 0.0), self
         diffuse = tuple(float(c) for c in getattr(self, self.lambertian_field))
+        if self.specular_field is not None and max(getattr(self, self.specular_field)) == 0.0:
+            return diffuse, None
         return diffuse, self.model_copy(update={self.lambertian_field: (0.0, 0.0, 0.0)})
 
     def lobe_summary(self) -> tuple[tuple[float, float, float], int, float]:

@@ -69,10 +69,7 @@ class Phong(Material):
     exponent: float = Field(default=100.0, ge=0, le=1e6, allow_inf_nan=False)
     normalized: bool = False
     lambertian_field: ClassVar[str] = "kd"
-
-    def lambertian_split(self):
-        diffuse, rest = super().lambertian_split()
-        return diffuse, None if max(self.ks) == 0.0 else rest
+    specular_field: ClassVar[str] = "ks"
 
     def lobe_summary(self):
         return tuple(float(c) for c in self.kd), 1, float(self.exponent)

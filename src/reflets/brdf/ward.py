@@ -61,10 +61,7 @@ class Ward(HalfVectorLobeMixture, Material):
     alpha: Roughness | tuple[Roughness, Roughness] = 0.1
     variant: Literal["duer", "original"] = "duer"
     lambertian_field: ClassVar[str] = "kd"
-
-    def lambertian_split(self):
-        diffuse, rest = super().lambertian_split()
-        return diffuse, None if max(self.ks) == 0.0 else rest
+    specular_field: ClassVar[str] = "ks"
 
     def lobe_summary(self):
         return tuple(float(c) for c in self.kd), 2, blinn_phong_exponent(self.alpha)
