@@ -67,7 +67,7 @@ AREA_METHODS = (
 
 #: later techniques add their scenes here
 DEMO: list[DemoEntry] = [
-    DemoEntry("60_showcase.toml", (Method("auto", spp=32),)),
+    DemoEntry("60_showcase.toml", (Method("auto", spp=32),), reference=True, visibility=False),
     DemoEntry("01_plane_point.toml"),
     DemoEntry("02_sphere_directional.toml"),
     DemoEntry("03_shapes.toml"),
@@ -116,6 +116,7 @@ class DemoResult:
     exr: str
     png: str
     reference: dict | None = None  # metrics vs the NumPy reference, its image and timing
+    description: str = ""  # the scene file's description (what to look at, what the reference can render)
 
 
 def scene_path(name: str) -> Path:
@@ -191,6 +192,7 @@ def _render_entry(ctx, name: str, method: Method, size, out_dir: Path) -> DemoRe
     return DemoResult(
         name=Path(name).stem,
         title=scene.title or Path(name).stem,
+        description=scene.description or "",
         method=method.label,
         size=f"{w}x{h}",
         prepare_ms=prepare_ms,
@@ -296,7 +298,9 @@ def _write_gallery(out_dir: Path, results: list[DemoResult], info: dict) -> None
             )
         cards.append(
             f'<figure><a href="{html.escape(r.exr)}"><img src="{html.escape(r.png)}" alt="{html.escape(r.title)}">'
-            f"</a><figcaption><b>{html.escape(r.title)}</b><br>method <code>{html.escape(r.method)}</code>, "
+            f"</a><figcaption><b>{html.escape(r.title)}</b>"
+            + (f"<br><small>{html.escape(r.description)}</small>" if r.description else "")
+            + f"<br>method <code>{html.escape(r.method)}</code>, "
             f"{r.size}<br>prepare {r.prepare_ms:.0f} ms, frame {r.frame_ms:.1f} ms ({html.escape(r.timer)}, median "
             f"of {FRAMES}){err}</figcaption></figure>"
         )
