@@ -353,16 +353,6 @@ def gpu_relative_errors(m: Measured, ctx, rng, n: int = 20000) -> np.ndarray:
     return np.abs(gpu - ref)[keep] / np.abs(ref)[keep]
 
 
-def filter_allowance(ctx) -> float:
-    """Extra relative error for hardware texture units, which filter with 8-bit weights (NVIDIA): up to
-    |Δf/f|/512 between neighbouring entries, ≤ 2e-3 where neighbours differ by up to 100 %. Mesa's software
-    rasterisers filter in float32 (measured: sample positions within 8e-6 of an entry). Not yet measured on
-    a hardware GPU."""
-    from reflets.gpu import is_software
-
-    return 0.0 if is_software(ctx) else 2e-3
-
-
 def test_glsl_matches_numpy_fp32(merl_file, ctx, rng):
     """Standard check (< 1e-3), then the actual agreement: the table is stored as float32 (6e-8) and the
     coordinates are float32 with our own atan (2e-7); steep regions next to the horizon amplify coordinate
@@ -370,7 +360,7 @@ def test_glsl_matches_numpy_fp32(merl_file, ctx, rng):
     driver's own atan (llvmpipe: 3e-6 rad off) gives 1e-3 and fails this."""
     m = Measured(file=merl_file, scale=(1.0, 0.5, 2.0))
     check_glsl_parity(m, ctx, rng)
-    assert gpu_relative_errors(m, ctx, rng).max() < 2e-4 + filter_allowance(ctx)
+    assert gpu_relative_errors(m, ctx, rng).max() < 2e-4
 
 
 def test_glsl_matches_numpy_fp16(merl_file, ctx, rng):
@@ -378,7 +368,7 @@ def test_glsl_matches_numpy_fp16(merl_file, ctx, rng):
     that bound. Plus the fp32 path's < 2e-4: asserted < 7e-4 (measured max 4.6e-4, median 8e-5)."""
     m = Measured(file=merl_file, precision="fp16")
     rel = gpu_relative_errors(m, ctx, rng)
-    assert rel.max() < 7e-4 + filter_allowance(ctx), rel.max()
+    assert rel.max() < 7e-4, rel.max()
     assert np.median(rel) > 1e-5  # really half precision (fp32 gives ~3e-8)
 
 
@@ -389,4 +379,4 @@ def test_textures_are_cached_per_context_and_precision(merl_file, ctx):
     assert fp16 is not fp32
     assert fp32.size == (180, 90, 90) and fp32.components == 3
     assert (fp32.dtype, fp16.dtype) == ("f4", "f2")
-    assert fp32.repeat_x and not fp32.repeat_y and not fp32.repeat_z
+    assert fp32.filter == (0x2600, 0x2600)  # GL_NEAREST: the shader interpolates (wrapping φd, clamping θ)

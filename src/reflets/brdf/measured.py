@@ -39,13 +39,13 @@ Entry i sits at continuous index **i + 0.5** — the centre of the interval it c
 OpenGL's texel-centre convention. :meth:`Measured.eval` interpolates trilinearly in continuous index space
 with entries at i + 0.5, clamping at both ends of θh and θd (below 0.5 or above n − 0.5 the edge entry is
 used) and wrapping φd with period 180 (entry 179 neighbours entry 0: φd = π is φd = 0 by reciprocity). The
-GLSL twin does the same with a 3D float texture (x = φd with REPEAT, y = θd and z = θh with CLAMP_TO_EDGE,
-LINEAR filtering, texture coordinate = continuous index / n), so NumPy and GPU agree to float precision
-(``precision = "fp16"``: to half-float rounding, 2^-11 relative). The shader computes the angles with its own
-atan (Cephes, 2e-7): GLSL leaves atan's accuracy to the driver, and llvmpipe's (3e-6 rad) alone gives 1e-3
-relative differences in steep table regions. Texture units that filter with 8-bit weights (NVIDIA's, per
-the CUDA guide) place the sample within 1/512 of an entry: a relative difference up to |Δf/f|/512 between
-neighbouring entries, below the table's own interpolation error. Nearest-entry lookup as in MERL's code
+GLSL twin does the same from a 3D float texture (x = φd, y = θd, z = θh, coordinate = continuous index / n),
+interpolating in float32 itself from eight ``texelFetch`` (wrap and clamp as here), so NumPy and GPU agree to
+float precision on every driver (``precision = "fp16"``: to half-float rounding, 2^-11 relative). The shader
+computes the angles with its own atan (Cephes, 2e-7): GLSL leaves atan's accuracy to the driver, and
+llvmpipe's (3e-6 rad) alone gives 1e-3 relative differences in steep table regions. Hardware LINEAR filtering
+is not used: texture units filter with 8-bit weights (measured on an NVIDIA H200: 1e-2 relative off this
+reference in steep table regions). Nearest-entry lookup as in MERL's code
 is *not* used: it makes f_r piecewise constant, with visible steps in highlights. :func:`write_merl`
 samples a function at the entry centres, so a written file reproduces it exactly there.
 
@@ -345,10 +345,7 @@ def _texture(ctx, table: MerlTable, precision: str):
         data, dtype = table.values.astype(np.float32), "f4"
     n_h, n_d, n_p = MERL_SHAPE
     texture = ctx.texture3d((n_p, n_d, n_h), 3, data.tobytes(), dtype=dtype)
-    texture.filter = (moderngl.LINEAR, moderngl.LINEAR)
-    texture.repeat_x = True  # φd is periodic
-    texture.repeat_y = False  # θd: clamp to edge
-    texture.repeat_z = False  # θh: clamp to edge
+    texture.filter = (moderngl.NEAREST, moderngl.NEAREST)  # read by texelFetch: the shader interpolates
     _TEXTURES[key] = (table.stamp, texture)
     return texture
 

@@ -4,8 +4,10 @@
 // Real relative index eta = n_inside / n_outside; total internal reflection (eta < 1) gives 1.
 float fresnel_dielectric(float cos_i, float eta) {
     cos_i = clamp(cos_i, 0.0, 1.0);
-    // cos²θt = 1 − sin²θi/η², written so that it does not cancel at grazing incidence for η near 1
-    float cos2_t = (eta * eta - 1.0 + cos_i * cos_i) / (eta * eta);
+    // cos²θt = 1 − sin²θi/η², written so that it does not cancel at grazing incidence for η near 1: as
+    // (η − 1)(η + 1) + cos²θi, which a compiler cannot reassociate into (η² + cos²θi) − 1 (NVIDIA's did, and at
+    // η = 1, cos θi < 2.4e-4 the sum rounded to 1: total internal reflection at grazing, a black rim)
+    float cos2_t = ((eta - 1.0) * (eta + 1.0) + cos_i * cos_i) / (eta * eta);
     if (cos2_t <= 0.0) return 1.0;  // total internal reflection
     float cos_t = sqrt(cos2_t);
     float rs = (cos_i - eta * cos_t) / max(cos_i + eta * cos_t, 1e-30);
