@@ -5,6 +5,7 @@ reflections with the same code, so a scratched plate looks the same in a mirror 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -23,7 +24,7 @@ ANISOTROPY = 16.0
 
 @dataclass(frozen=True)
 class LobeSettings:
-    """How the lobes are sampled (the ``scratches`` method's parameters of the same names)."""
+    """How the lobes are sampled (the ``scratches`` method's parameters of the same names take these defaults)."""
 
     samples: int = 8  # environment samples per pixel and frame (split ∝ α_k)
     light_samples: int = 4  # samples per thickened light and live layer per frame
@@ -38,9 +39,13 @@ class ScratchLobes:
         self.ctx = ctx
         self.scene = scene
         self.settings = settings
-        self._env_image = load_environment(scene)
         self._textures: dict[str, dict[str, object]] = {}
         self._objects: list = []
+
+    @functools.cached_property
+    def _env_image(self):
+        """The environment map, read when a scratched material first needs it (a pass may have none)."""
+        return load_environment(self.scene)
 
     def table_of(self, material: Scratched):
         """The material's scratch table as these settings compute it."""

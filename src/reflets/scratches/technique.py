@@ -44,11 +44,17 @@ SCRATCHES_PROGRAM = ProgramSpec(
 class ScratchesParams(ForwardParams):
     """Parameters of ``scratches``."""
 
-    samples: int = Field(8, ge=0, le=256, description="environment samples per pixel and frame (split ∝ α_k)")
-    light_samples: int = Field(4, ge=1, le=64, description="samples per thickened light and live layer per frame")
-    thickness: float = Field(2.0, gt=0, le=10, description="H: angular radius of thickened lights, degrees")
+    samples: int = Field(
+        LobeSettings.samples, ge=0, le=256, description="environment samples per pixel and frame (split ∝ α_k)"
+    )
+    light_samples: int = Field(
+        LobeSettings.light_samples, ge=1, le=64, description="samples per thickened light and live layer per frame"
+    )
+    thickness: float = Field(
+        LobeSettings.thickness, gt=0, le=10, description="H: angular radius of thickened lights, degrees"
+    )
     table_backend: Literal["auto", "numpy", "gpu"] = Field(
-        "auto", description="scratch-table tracer (auto: the GPU compute shader, faster here)"
+        LobeSettings.table_backend, description="scratch-table tracer (auto: the GPU compute shader, faster here)"
     )
 
 
