@@ -175,7 +175,7 @@ class _EmitterSampler:
     vertex as a point light at the sampled point y of intensity L A cos θ_y towards it (θ_y from the emitting
     side's normal; both sides for a two-sided light), i.e. the area integral estimated with pdf 1/A."""
 
-    def __init__(self, light, epsilon: float):
+    def __init__(self, light):
         poly = np.asarray(light.polygon(), np.float64)
         normal = np.sum(np.cross(poly, np.roll(poly, -1, axis=0)), axis=0)  # Newell: counter-clockwise = front
         self.normal = normal / np.linalg.norm(normal)
@@ -186,7 +186,6 @@ class _EmitterSampler:
         self.cdf = np.cumsum(areas) / self.area
         self.two_sided = bool(light.two_sided)
         self.radiance = np.asarray(light.radiance, np.float64)
-        self.offset = epsilon * self.normal  # traces leave the emitter's plane on its front side
 
     def sample(self, rng, n: int) -> np.ndarray:
         k = np.minimum(np.searchsorted(self.cdf, rng.random(n), side="right"), len(self.tri) - 1)
@@ -202,10 +201,10 @@ class _EmitterSampler:
         return np.abs(c) if self.two_sided else np.maximum(c, 0.0)
 
 
-def _emitter(light, geometry) -> _EmitterSampler | None:
+def _emitter(light) -> _EmitterSampler | None:
     from ..scene.model import PolygonLight, QuadLight
 
-    return _EmitterSampler(light, geometry.epsilon) if isinstance(light, QuadLight | PolygonLight) else None
+    return _EmitterSampler(light) if isinstance(light, QuadLight | PolygonLight) else None
 
 
 def _light_stream(rng):
@@ -329,7 +328,7 @@ class _VolumetricJob:
         total = np.zeros((len(pix), 3))
         total2 = np.zeros((len(pix), 3))
         directional = isinstance(light, DirectionalLight)
-        emitter, light_rng = _emitter(light, geometry), _light_stream(rng)
+        emitter, light_rng = _emitter(light), _light_stream(rng)
         if directional:
             to_light = -np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
             power = np.asarray(light.irradiance, np.float64)
@@ -673,7 +672,7 @@ def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits,
     sigma_t = np.asarray(medium.sigma_t, np.float64)[channel] * scale
     albedo = np.asarray(medium.albedo, np.float64)[channel]
     eps = geometry.epsilon
-    emitter, light_rng = _emitter(light, geometry), _light_stream(rng)
+    emitter, light_rng = _emitter(light), _light_stream(rng)
     if isinstance(light, DirectionalLight):
         travel = np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
         connect = {"travel": travel}
@@ -708,8 +707,8 @@ def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits,
             pos[sc] += d[sc] * t_free[scatter, None]
             w[sc] *= albedo[sc]
             events[sc] += 1
-            if emitter is not None:  # a point of the emitter per vertex, just off its plane
-                connect = {"light_pos": emitter.sample(light_rng, sc.size) + emitter.offset}
+            if emitter is not None:  # a point of the emitter per vertex (not in the traced geometry)
+                connect = {"light_pos": emitter.sample(light_rng, sc.size)}
             t_light, factor, length, valid, leaving = _refracted_connection(geometry, pos[sc], eta, **connect)
             if emitter is not None:
                 factor = factor * emitter.cosine(leaving)
