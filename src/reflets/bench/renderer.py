@@ -5,10 +5,10 @@
   k-th frame: one-shot frames cost seconds on a software rasteriser), the two images compared; the cost of each
   pass of one frame (a ``ctx.finish()`` after each pass);
 - each showcase object against ground truth, in the pixels where it is the nearest surface: the composed frame
-  against the NumPy reference (visibility off: no technique casts shadows yet, issue 14), and the marble under
-  the point light alone against the volumetric reference (all orders of scattering, η = 1.5 refracted) — both
-  the ``translucent`` technique auto uses for that light and the far-field BRDF auto uses for the quad light
-  and the sky (the reference takes one point light: this measures what that approximation costs);
+  against the NumPy reference (visibility off: no technique casts shadows yet, issue 14), and the marble alone
+  under each of its lights against the volumetric reference (all orders of scattering, η = 1.5 refracted): the
+  ``translucent`` technique auto uses for the point light, the far-field BRDF it uses for the quad light and
+  the sky;
 - scaling: a GGX sphere on a floor with 1, 4, 16 point lights, 1, 4 quad lights, and 1, 10, 100 sphere
   instances, median frame of a persistent renderer.
 
@@ -163,6 +163,7 @@ def _objects(size, spp: int, reference_spp: int, volumetric_spp: int, out_dir) -
     for light, models in (
         ("point", (("translucent technique (what auto draws)", "auto"), ("far-field BRDF", "forward"))),
         ("quad", (("far-field BRDF by LTC (what auto draws)", "auto"),)),
+        ("environment", (("far-field BRDF, environment grid (what auto draws)", "auto"),)),
     ):
         marble = _showcase_scene(size, meshes={"marble"}, lights={light})
         kind = "" if light == "point" else f"{light}_"
@@ -203,14 +204,15 @@ def _objects(size, spp: int, reference_spp: int, volumetric_spp: int, out_dir) -
         *[f"| {r['object']} | {r['pixels']} | {r['relmse']:.2e} | {r['reference']} |" for r in rows],
         "",
         f"The marble alone under one light against the volumetric reference ({volumetric_spp} spp, all orders of "
-        "scattering through its η = 1.5 boundary; a quad light sampled over its area; "
+        "scattering through its η = 1.5 boundary; a quad light sampled over its area, the sky by its importance "
+        "sampler; "
         + ", ".join(
             f"{k} light {'stored' if r['stored'] else 'computed'} in {r['seconds']:.0f} s"
             for k, r in references.items()
         )
-        + "): under a point light auto runs the translucent technique; a quad light (and the sky, which the "
-        "reference does not take) reaches a translucent object through its far-field BRDF. Relative MSE over the "
-        "marble's pixels, and the reference's own noise (mean (σ / value)²) for scale:",
+        + "): under a point light auto runs the translucent technique; a quad light and the sky reach a "
+        "translucent object through its far-field BRDF. Relative MSE over the marble's pixels, and the "
+        "reference's own noise (mean (σ / value)²) for scale:",
         "",
         "| light | model | relative MSE | reference noise |",
         "|---|---|---|---|",

@@ -39,7 +39,7 @@ def reference(
     spp : samples per pixel; seed : random seed (same seed, same image)
     engine : "numpy" (ours) or "mitsuba" (Mitsuba 3 ``scalar_rgb`` with its ``direct`` integrator; always
         with shadows and box pixel filtering; needs the ``reference`` extra) or "volumetric" (path tracing of a
-        translucent medium inside its smooth boundary, one point, directional, quad or polygon light: the
+        translucent medium inside its smooth boundary, one point, directional, quad, polygon or environment light: the
         ``translucent`` technique's single + multiple scattering, reflets.reference.volumetric; pixel centres, with
         shadows)
     workers : processes sharing the samples (volumetric engine)

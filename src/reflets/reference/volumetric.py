@@ -149,7 +149,7 @@ class VolumetricImage:
 
 def _check_volumetric_scene(scene):
     from ..errors import ArgumentError
-    from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight
+    from ..scene.model import DirectionalLight, EnvironmentLight, PointLight, PolygonLight, QuadLight
     from ..translucency.material import Translucent
 
     materials = {mesh.material for mesh in scene.mesh}
@@ -159,11 +159,12 @@ def _check_volumetric_scene(scene):
             field="mesh.material",
         )
     material = scene.materials[next(iter(materials))]
-    kinds = PointLight | DirectionalLight | QuadLight | PolygonLight
+    kinds = PointLight | DirectionalLight | QuadLight | PolygonLight | EnvironmentLight
     lights = [light for light in scene.light if isinstance(light, kinds)]
     if len(scene.light) != 1 or not lights:
         raise ArgumentError(
-            "the volumetric reference needs exactly one point, directional, quad or polygon light", field="light"
+            "the volumetric reference needs exactly one point, directional, quad, polygon or environment light",
+            field="light",
         )
     if getattr(lights[0], "mask", None) is not None:
         raise ArgumentError("the volumetric reference takes quad lights without a mask", field="light[0].mask")
@@ -201,10 +202,34 @@ class _EmitterSampler:
         return np.abs(c) if self.two_sided else np.maximum(c, 0.0)
 
 
+class _SkySampler:
+    """The environment, importance-sampled (reference.lights.EnvironmentSampler): a direction ω with density p
+    reaches a scattering vertex as a directional light of irradiance L(ω) / p from ω."""
+
+    def __init__(self, scene, light):
+        from ..scene.environment import load_environment
+        from .lights import EnvironmentSampler
+
+        self.sampler = EnvironmentSampler(load_environment(scene), light)
+
+    def sample(self, rng, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(unit directions towards the sky (n, 3), irradiance per unit solid-angle density (n, 3))."""
+        dirs, pdf = self.sampler.sample(rng.random(n), rng.random(n))
+        ok = pdf > 0.0
+        weight = np.where(ok[:, None], self.sampler.radiance(dirs) / np.where(ok, pdf, 1.0)[:, None], 0.0)
+        return dirs, weight
+
+
 def _emitter(light) -> _EmitterSampler | None:
     from ..scene.model import PolygonLight, QuadLight
 
     return _EmitterSampler(light) if isinstance(light, QuadLight | PolygonLight) else None
+
+
+def _sky(scene, light) -> _SkySampler | None:
+    from ..scene.model import EnvironmentLight
+
+    return _SkySampler(scene, light) if isinstance(light, EnvironmentLight) else None
 
 
 def _light_stream(rng):
@@ -250,8 +275,9 @@ def render_volumetric(
     workers: int = 1,
 ) -> VolumetricImage:
     """Volumetric path tracing of a homogeneous translucent medium inside the scene's closed meshes, lit by one
-    point, directional, quad or polygon light (an emitter's points sampled uniformly over its area, each a point
-    light of intensity L A cos θ_y): the ground truth of the ``translucent`` technique (all orders of scattering).
+    point, directional, quad, polygon or environment light (an emitter's points sampled uniformly over its area,
+    each a point light of intensity L A cos θ_y; the sky importance-sampled, each direction a directional light of
+    irradiance L / p): the ground truth of the ``translucent`` technique (all orders of scattering).
 
     Index-matched boundary (``eta = 1``): camera rays enter straight, every scattering vertex connects to
     the light with a shadow ray whose transmittance counts the medium crossed on the way (re-entries included,
@@ -297,6 +323,7 @@ class _VolumetricJob:
         from .geometry import MESHES, SceneGeometry
 
         material, self.light = _check_volumetric_scene(scene)
+        self.sky = _sky(scene, self.light)
         self.geometry = SceneGeometry(scene.model_copy(update={"light": []}))  # the medium's boundary only
         self.medium = material.medium()
         self.scale = material.mm_per_unit  # σ per mm → per scene unit
@@ -316,7 +343,7 @@ class _VolumetricJob:
         if self.refracting:
             return _render_refracting(
                 self.geometry, self.medium, self.scale, self.light, self.dirs[self.pix], self.hits, self.pix,
-                spp, rng, self.orders, advance,
+                spp, rng, self.orders, advance, self.sky,
             )  # fmt: skip
         return self._sums_index_matched(spp, rng, advance)
 
@@ -328,13 +355,13 @@ class _VolumetricJob:
         total = np.zeros((len(pix), 3))
         total2 = np.zeros((len(pix), 3))
         directional = isinstance(light, DirectionalLight)
-        emitter, light_rng = _emitter(light), _light_stream(rng)
+        emitter, light_rng, sky = _emitter(light), _light_stream(rng), self.sky
         if directional:
             to_light = -np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
             power = np.asarray(light.irradiance, np.float64)
         elif emitter is not None:
             power = emitter.radiance * emitter.area
-        else:
+        elif sky is None:  # (the sky: a direction and its irradiance drawn per vertex)
             light_pos = np.asarray(light.position, np.float64)
             power = np.asarray(light.intensity, np.float64)
         for _ in range(spp):
@@ -358,7 +385,11 @@ class _VolumetricJob:
                     pos[stay] += d[stay] * t[~leaves, None]
                     wgt[stay] *= albedo
                     # next-event estimation towards the light
-                    if directional:
+                    if sky is not None:
+                        wl, irradiance = sky.sample(light_rng, stay.size)
+                        dist = np.full(stay.size, np.inf)
+                        incident = irradiance[:, c]
+                    elif directional:
                         wl = np.broadcast_to(to_light, (stay.size, 3))
                         dist = np.full(stay.size, np.inf)
                         incident = np.broadcast_to(power[c], stay.size)
@@ -642,7 +673,7 @@ def _samples_per_batch(pixels: int) -> int:
     return max(1, 300_000 // max(3 * pixels, 1))
 
 
-def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng, orders, advance):
+def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng, orders, advance, sky=None):
     """All samples and channels of the refracting walk as one batch (chunked): per-path coefficients, so that
     the long tail of the walks runs on large arrays. Returns per-pixel Σ and Σ² of the samples (P, 3)."""
     n = len(pix)
@@ -654,7 +685,7 @@ def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng
         k = min(per_chunk, spp - done)
         channel = np.tile(np.repeat(np.arange(3), n), k)
         pixel = np.tile(np.arange(n), 3 * k)
-        acc = _walk_refracting(geometry, medium, channel, scale, light, dirs[pixel], hits, pix[pixel], rng, orders)
+        acc = _walk_refracting(geometry, medium, channel, scale, light, dirs[pixel], hits, pix[pixel], rng, orders, sky)
         acc = acc.reshape(k, 3, n)
         total += acc.sum(axis=0).T
         total2 += (acc * acc).sum(axis=0).T
@@ -663,7 +694,7 @@ def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng
     return total, total2
 
 
-def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits, rays, rng, orders=None):
+def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits, rays, rng, orders=None, sky=None):
     """One path per camera ray (channel per path) through a smooth dielectric boundary (render_volumetric)."""
     from ..scene.model import DirectionalLight
     from .geometry import MESHES
@@ -673,7 +704,9 @@ def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits,
     albedo = np.asarray(medium.albedo, np.float64)[channel]
     eps = geometry.epsilon
     emitter, light_rng = _emitter(light), _light_stream(rng)
-    if isinstance(light, DirectionalLight):
+    if sky is not None:
+        power = np.ones(len(channel))  # the irradiance of each sampled direction goes into the factor
+    elif isinstance(light, DirectionalLight):
         travel = np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
         connect = {"travel": travel}
         power = np.asarray(light.irradiance, np.float64)[channel]
@@ -709,9 +742,14 @@ def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits,
             events[sc] += 1
             if emitter is not None:  # a point of the emitter per vertex (not in the traced geometry)
                 connect = {"light_pos": emitter.sample(light_rng, sc.size)}
+            if sky is not None:  # a sky direction per vertex, as a directional light
+                towards, irradiance = sky.sample(light_rng, sc.size)
+                connect = {"travel": -towards}
             t_light, factor, length, valid, leaving = _refracted_connection(geometry, pos[sc], eta, **connect)
             if emitter is not None:
                 factor = factor * emitter.cosine(leaving)
+            if sky is not None:
+                factor = factor * irradiance[np.arange(sc.size), channel[sc]]
             phase = henyey_greenstein(-np.sum(d[sc] * t_light, axis=1), medium.g)
             contribution = w[sc] * phase * power[sc] * factor * np.exp(-sigma_t[sc] * length)
             acc[sc] += np.where(valid, contribution, 0.0)
