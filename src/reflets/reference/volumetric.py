@@ -171,70 +171,56 @@ def _check_volumetric_scene(scene):
     return material, lights[0]
 
 
-class _EmitterSampler:
-    """Uniform points on a quad or polygon light (its fan triangles by area): the light reaches a scattering
-    vertex as a point light at the sampled point y of intensity L A cos θ_y towards it (θ_y from the emitting
-    side's normal; both sides for a two-sided light), i.e. the area integral estimated with pdf 1/A."""
-
-    def __init__(self, light):
-        poly = np.asarray(light.polygon(), np.float64)
-        normal = np.sum(np.cross(poly, np.roll(poly, -1, axis=0)), axis=0)  # Newell: counter-clockwise = front
-        self.normal = normal / np.linalg.norm(normal)
-        self.tri = np.stack([np.repeat(poly[:1], len(poly) - 2, axis=0), poly[1:-1], poly[2:]], axis=1)
-        edges = np.cross(self.tri[:, 1] - self.tri[:, 0], self.tri[:, 2] - self.tri[:, 0])
-        areas = 0.5 * np.linalg.norm(edges, axis=1)
-        self.area = float(areas.sum())
-        self.cdf = np.cumsum(areas) / self.area
-        self.two_sided = bool(light.two_sided)
-        self.radiance = np.asarray(light.radiance, np.float64)
-
-    def sample(self, rng, n: int) -> np.ndarray:
-        k = np.minimum(np.searchsorted(self.cdf, rng.random(n), side="right"), len(self.tri) - 1)
-        a, b = rng.random(n), rng.random(n)
-        flip = a + b > 1.0
-        a, b = np.where(flip, 1.0 - a, a), np.where(flip, 1.0 - b, b)
-        tri = self.tri[k]
-        return tri[:, 0] + a[:, None] * (tri[:, 1] - tri[:, 0]) + b[:, None] * (tri[:, 2] - tri[:, 0])
-
-    def cosine(self, leaving: np.ndarray) -> np.ndarray:
-        """cos θ_y of light leaving the emitter along unit directions ``leaving`` (0 behind a one-sided light)."""
-        c = leaving @ self.normal
-        return np.abs(c) if self.two_sided else np.maximum(c, 0.0)
-
-
-class _SkySampler:
-    """The environment, importance-sampled (reference.lights.EnvironmentSampler): a direction ω with density p
-    reaches a scattering vertex as a directional light of irradiance L(ω) / p from ω."""
+class _NextEvent:
+    """The scene's one light as the walks connect to it from a scattering vertex: a point light (position and
+    intensity per channel, times the emitter's cos θ_y once the light ray's leaving direction is known) or a
+    directional light (travel direction, irradiance per channel). A quad or polygon light is a uniform point y of
+    the emitter (reference.lights.PolygonSampler) of intensity L A cos θ_y; the environment an importance-sampled
+    direction ω (EnvironmentSampler) of irradiance L(ω) / p(ω)."""
 
     def __init__(self, scene, light):
         from ..scene.environment import load_environment
-        from .lights import EnvironmentSampler
+        from ..scene.model import DirectionalLight, EnvironmentLight, PolygonLight, QuadLight
+        from .lights import EnvironmentSampler, PolygonSampler
 
-        self.sampler = EnvironmentSampler(load_environment(scene), light)
+        self.light = light
+        self.polygon = PolygonSampler(light) if isinstance(light, QuadLight | PolygonLight) else None
+        self.sky = EnvironmentSampler(load_environment(scene), light) if isinstance(light, EnvironmentLight) else None
+        #: a point (position) to connect to, else a direction (the light's travel)
+        self.point = not isinstance(light, DirectionalLight | EnvironmentLight)
 
-    def sample(self, rng, n: int) -> tuple[np.ndarray, np.ndarray]:
-        """(unit directions towards the sky (n, 3), irradiance per unit solid-angle density (n, 3))."""
-        dirs, pdf = self.sampler.sample(rng.random(n), rng.random(n))
-        ok = pdf > 0.0
-        weight = np.where(ok[:, None], self.sampler.radiance(dirs) / np.where(ok, pdf, 1.0)[:, None], 0.0)
-        return dirs, weight
+    def draw(self, rng, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(positions, or travel directions, (n, 3); intensity, or irradiance, per channel (n, 3)) for n vertices."""
+        light = self.light
+        if self.polygon is not None:
+            y = self.polygon.sample(rng.random(n), rng.random(n))
+            return y, self.polygon.radiance_at(y) * self.polygon.area
+        if self.sky is not None:
+            towards, pdf = self.sky.sample(rng.random(n), rng.random(n))
+            ok = pdf > 0.0
+            irradiance = np.where(ok[:, None], self.sky.radiance(towards) / np.where(ok, pdf, 1.0)[:, None], 0.0)
+            return -towards, irradiance
+        if self.point:
+            return _rows(light.position, n), _rows(light.intensity, n)
+        return _rows(np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction), n), _rows(
+            light.irradiance, n
+        )
+
+    def cosine(self, leaving: np.ndarray) -> np.ndarray | float:
+        """The emitter's cos θ_y for light rays leaving it along ``leaving`` (0 behind a one-sided emitter)."""
+        if self.polygon is None:
+            return 1.0
+        cos, front = self.polygon.emitted(-leaving)
+        return np.where(front, cos, 0.0)
 
 
-def _emitter(light) -> _EmitterSampler | None:
-    from ..scene.model import PolygonLight, QuadLight
-
-    return _EmitterSampler(light) if isinstance(light, QuadLight | PolygonLight) else None
-
-
-def _sky(scene, light) -> _SkySampler | None:
-    from ..scene.model import EnvironmentLight
-
-    return _SkySampler(scene, light) if isinstance(light, EnvironmentLight) else None
+def _rows(vector, n: int) -> np.ndarray:
+    return np.broadcast_to(np.asarray(vector, np.float64), (n, 3))
 
 
 def _light_stream(rng):
-    """A stream for the emitter's points, independent of the walks' (spawned from the same seed: the walks draw
-    the same numbers whatever the light)."""
+    """A stream for the light's random points and directions, independent of the walks' (spawned from the same
+    seed: the walks draw the same numbers whatever the light)."""
     return np.random.default_rng(rng.bit_generator.seed_seq.spawn(1)[0])
 
 
@@ -322,8 +308,8 @@ class _VolumetricJob:
         from ..scene.camera import pixel_rays
         from .geometry import MESHES, SceneGeometry
 
-        material, self.light = _check_volumetric_scene(scene)
-        self.sky = _sky(scene, self.light)
+        material, light = _check_volumetric_scene(scene)
+        self.source = _NextEvent(scene, light)
         self.geometry = SceneGeometry(scene.model_copy(update={"light": []}))  # the medium's boundary only
         self.medium = material.medium()
         self.scale = material.mm_per_unit  # σ per mm → per scene unit
@@ -342,28 +328,17 @@ class _VolumetricJob:
         """Per-pixel Σ and Σ² over ``spp`` samples (P, 3); ``advance(k)`` after every k samples done."""
         if self.refracting:
             return _render_refracting(
-                self.geometry, self.medium, self.scale, self.light, self.dirs[self.pix], self.hits, self.pix,
-                spp, rng, self.orders, advance, self.sky,
+                self.geometry, self.medium, self.scale, self.source, self.dirs[self.pix], self.hits, self.pix,
+                spp, rng, self.orders, advance,
             )  # fmt: skip
         return self._sums_index_matched(spp, rng, advance)
 
     def _sums_index_matched(self, spp, rng, advance):
-        from ..scene.model import DirectionalLight
-
-        geometry, medium, light, pix, orders = self.geometry, self.medium, self.light, self.pix, self.orders
+        geometry, medium, source, pix, orders = self.geometry, self.medium, self.source, self.pix, self.orders
         dirs = self.dirs
         total = np.zeros((len(pix), 3))
         total2 = np.zeros((len(pix), 3))
-        directional = isinstance(light, DirectionalLight)
-        emitter, light_rng, sky = _emitter(light), _light_stream(rng), self.sky
-        if directional:
-            to_light = -np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
-            power = np.asarray(light.irradiance, np.float64)
-        elif emitter is not None:
-            power = emitter.radiance * emitter.area
-        elif sky is None:  # (the sky: a direction and its irradiance drawn per vertex)
-            light_pos = np.asarray(light.position, np.float64)
-            power = np.asarray(light.intensity, np.float64)
+        light_rng = _light_stream(rng)
         for _ in range(spp):
             for c in range(3):
                 sigma_t = float(medium.sigma_t[c]) * self.scale
@@ -385,22 +360,14 @@ class _VolumetricJob:
                     pos[stay] += d[stay] * t[~leaves, None]
                     wgt[stay] *= albedo
                     # next-event estimation towards the light
-                    if sky is not None:
-                        wl, irradiance = sky.sample(light_rng, stay.size)
-                        dist = np.full(stay.size, np.inf)
-                        incident = irradiance[:, c]
-                    elif directional:
-                        wl = np.broadcast_to(to_light, (stay.size, 3))
-                        dist = np.full(stay.size, np.inf)
-                        incident = np.broadcast_to(power[c], stay.size)
-                    else:
-                        target = light_pos if emitter is None else emitter.sample(light_rng, stay.size)
-                        v = target - pos[stay]
+                    where, power = source.draw(light_rng, stay.size)
+                    if source.point:
+                        v = where - pos[stay]
                         dist = np.linalg.norm(v, axis=1)
                         wl = v / dist[:, None]
-                        incident = power[c] / (dist * dist)
-                        if emitter is not None:
-                            incident = incident * emitter.cosine(-wl)
+                        incident = power[:, c] / (dist * dist) * source.cosine(-wl)
+                    else:
+                        wl, dist, incident = -where, np.full(stay.size, np.inf), power[:, c]
                     inside = _inside_length(geometry, pos[stay], np.ascontiguousarray(wl), dist)
                     phase = henyey_greenstein(np.sum(d[stay] * wl, axis=1), medium.g)
                     acc[stay] += wgt[stay] * phase * incident * np.exp(-sigma_t * inside)
@@ -673,7 +640,7 @@ def _samples_per_batch(pixels: int) -> int:
     return max(1, 300_000 // max(3 * pixels, 1))
 
 
-def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng, orders, advance, sky=None):
+def _render_refracting(geometry, medium, scale, source, dirs, hits, pix, spp, rng, orders, advance):
     """All samples and channels of the refracting walk as one batch (chunked): per-path coefficients, so that
     the long tail of the walks runs on large arrays. Returns per-pixel Σ and Σ² of the samples (P, 3)."""
     n = len(pix)
@@ -685,7 +652,7 @@ def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng
         k = min(per_chunk, spp - done)
         channel = np.tile(np.repeat(np.arange(3), n), k)
         pixel = np.tile(np.arange(n), 3 * k)
-        acc = _walk_refracting(geometry, medium, channel, scale, light, dirs[pixel], hits, pix[pixel], rng, orders, sky)
+        acc = _walk_refracting(geometry, medium, channel, scale, source, dirs[pixel], hits, pix[pixel], rng, orders)
         acc = acc.reshape(k, 3, n)
         total += acc.sum(axis=0).T
         total2 += (acc * acc).sum(axis=0).T
@@ -694,27 +661,15 @@ def _render_refracting(geometry, medium, scale, light, dirs, hits, pix, spp, rng
     return total, total2
 
 
-def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits, rays, rng, orders=None, sky=None):
+def _walk_refracting(geometry, medium, channel, scale: float, source, dirs, hits, rays, rng, orders=None):
     """One path per camera ray (channel per path) through a smooth dielectric boundary (render_volumetric)."""
-    from ..scene.model import DirectionalLight
     from .geometry import MESHES
 
     eta = float(medium.eta)
     sigma_t = np.asarray(medium.sigma_t, np.float64)[channel] * scale
     albedo = np.asarray(medium.albedo, np.float64)[channel]
     eps = geometry.epsilon
-    emitter, light_rng = _emitter(light), _light_stream(rng)
-    if sky is not None:
-        power = np.ones(len(channel))  # the irradiance of each sampled direction goes into the factor
-    elif isinstance(light, DirectionalLight):
-        travel = np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
-        connect = {"travel": travel}
-        power = np.asarray(light.irradiance, np.float64)[channel]
-    elif emitter is not None:
-        power = (emitter.radiance * emitter.area)[channel]
-    else:
-        connect = {"light_pos": np.asarray(light.position, np.float64)}
-        power = np.asarray(light.intensity, np.float64)[channel]
+    light_rng = _light_stream(rng)
     n = len(rays)
     surf = _hit_points(geometry, hits.prim[rays], hits.u[rays], hits.v[rays], dirs)  # normals facing the camera
     d, ok = _refract(dirs, surf.normal, 1.0 / eta)
@@ -740,18 +695,12 @@ def _walk_refracting(geometry, medium, channel, scale: float, light, dirs, hits,
             pos[sc] += d[sc] * t_free[scatter, None]
             w[sc] *= albedo[sc]
             events[sc] += 1
-            if emitter is not None:  # a point of the emitter per vertex (not in the traced geometry)
-                connect = {"light_pos": emitter.sample(light_rng, sc.size)}
-            if sky is not None:  # a sky direction per vertex, as a directional light
-                towards, irradiance = sky.sample(light_rng, sc.size)
-                connect = {"travel": -towards}
+            where, power = source.draw(light_rng, sc.size)  # (emitters are not in the traced geometry)
+            connect = {"light_pos": where} if source.point else {"travel": where}
             t_light, factor, length, valid, leaving = _refracted_connection(geometry, pos[sc], eta, **connect)
-            if emitter is not None:
-                factor = factor * emitter.cosine(leaving)
-            if sky is not None:
-                factor = factor * irradiance[np.arange(sc.size), channel[sc]]
+            power = power[np.arange(sc.size), channel[sc]] * source.cosine(leaving)
             phase = henyey_greenstein(-np.sum(d[sc] * t_light, axis=1), medium.g)
-            contribution = w[sc] * phase * power[sc] * factor * np.exp(-sigma_t[sc] * length)
+            contribution = w[sc] * phase * power * factor * np.exp(-sigma_t[sc] * length)
             acc[sc] += np.where(valid, contribution, 0.0)
             cos_t = sample_henyey_greenstein(medium.g, rng.random(sc.size))
             d[sc] = _scatter(d[sc], cos_t, 2.0 * np.pi * rng.random(sc.size))
