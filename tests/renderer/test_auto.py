@@ -184,43 +184,22 @@ def _toml(scene: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _showcase_parts(size):
-    from reflets.demo import scene_path
-
-    scene = reflets.load_scene(scene_path("60_showcase.toml"))
-    full = scene.model_dump(exclude={"base_dir"}, exclude_none=True)
-    full["camera"]["size"] = list(size)
-
-    def alone(index: int, lights=None) -> reflets.Scene:
-        data = {**full, "mesh": [full["mesh"][index]], "light": full["light"] if lights is None else lights}
-        return reflets.load_dict(data, base_dir=scene.base_dir)
-
-    def visible(part: reflets.Scene, whole: reflets.Scene) -> np.ndarray:
-        """Pixels where this object is the nearest surface of the whole scene."""
-        mine = reflets.render(part, method="position")
-        seen = reflets.render(whole, method="position")
-        return np.all(np.abs(mine - seen) < 1e-5, axis=-1) & np.any(mine != 0, axis=-1)
-
-    return scene, full, alone, visible
-
-
 @pytest.mark.slow
 def test_showcase_objects_equal_their_own_technique(ctx):
     """The showcase's bunny (ltc), plate (scratches) and marble (translucent: its point light through the
     light view, the quad light and sky through its far-field BRDF) equal renders of each alone."""
+    from reflets.bench.renderer import nearest_surface, showcase_scene
+
     size = (128, 96)
-    scene, full, alone, visible = _showcase_parts(size)
-    whole = reflets.load_dict(full, base_dir=scene.base_dir)
+    whole = showcase_scene(size)
     composed = reflets.render(whole, spp=8)
-    names = [m["name"] for m in full["mesh"]]
     for name, method, spp in (("bunny", "ltc", 1), ("plate", "scratches", 8), ("marble", "auto", 1)):
-        part = alone(names.index(name))
-        mask = visible(part, whole)
+        part = showcase_scene(size, meshes={name})
+        mask = nearest_surface(part, whole)
         assert mask.sum() > 50, name
         own = reflets.render(part, method=method, spp=spp)
         assert region_relmse(composed, own, mask) < 1e-3, name
     # the marble's own technique, alone under the point light, is what auto draws for that light
-    point = [light for light in full["light"] if light["type"] == "point"]
-    part = alone(names.index("marble"), lights=point)
-    mask = visible(part, part)
+    part = showcase_scene(size, meshes={"marble"}, lights={"point"})
+    mask = nearest_surface(part, part)
     assert region_relmse(reflets.render(part), reflets.render(part, method="translucent"), mask) < 1e-6

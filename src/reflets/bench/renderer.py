@@ -105,7 +105,7 @@ def _showcase(size, frames: int, one_shot_every: int) -> tuple[dict, list[str]]:
     return result, lines
 
 
-def _showcase_scene(size, meshes=None, lights=None):
+def showcase_scene(size, meshes=None, lights=None):
     """The showcase at ``size``, optionally with only the named meshes and the lights of the given types."""
     scene = load_scene(scene_path("60_showcase.toml"))
     data = scene.model_dump(exclude={"base_dir"}, exclude_none=True)
@@ -115,6 +115,15 @@ def _showcase_scene(size, meshes=None, lights=None):
     if lights is not None:
         data["light"] = [light for light in data["light"] if light["type"] in lights]
     return load_dict(data, base_dir=scene.base_dir)
+
+
+def nearest_surface(part, whole) -> np.ndarray:
+    """Pixels where the meshes of ``part`` (a subset of ``whole``'s) are the nearest surface of ``whole``."""
+    import reflets
+
+    mine = reflets.render(part, method="position")
+    seen = reflets.render(whole, method="position")
+    return np.all(np.abs(mine - seen) < 1e-5, axis=-1) & np.any(mine != 0, axis=-1)
 
 
 #: what the reference evaluates on each showcase object, against what auto draws there. The scratched plate has
@@ -137,7 +146,7 @@ def _objects(size, spp: int, reference_spp: int, volumetric_spp: int, out_dir) -
     from ..reference.volumetric import render_volumetric
 
     rows = []
-    whole = _showcase_scene(size)
+    whole = showcase_scene(size)
     with reflets.Renderer(whole) as renderer:
         composed = renderer.render(spp=spp)
         # auto's spp is an s×s supersample of each pixel, or, with a progressive pass (scratches), frames of
@@ -146,10 +155,8 @@ def _objects(size, spp: int, reference_spp: int, volumetric_spp: int, out_dir) -
         supersampled = renderer._technique.frames(spp)[1] > 1
     pixel = "box" if supersampled else "center"
     reference = reflets.reference(whole, spp=reference_spp, visibility=False, pixel=pixel, progress=False)
-    seen = reflets.render(whole, method="position")
     for name in [mesh.name for mesh in whole.mesh if mesh.name in REFERENCE_MODEL]:
-        mine = reflets.render(_showcase_scene(size, meshes={name}), method="position")
-        mask = np.all(np.abs(mine - seen) < 1e-5, axis=-1) & np.any(mine != 0, axis=-1)
+        mask = nearest_surface(showcase_scene(size, meshes={name}), whole)
         rows.append(
             {
                 "object": name,
@@ -165,7 +172,7 @@ def _objects(size, spp: int, reference_spp: int, volumetric_spp: int, out_dir) -
         ("quad", (("far-field BRDF by LTC (what auto draws)", "auto"),)),
         ("environment", (("far-field BRDF, environment grid (what auto draws)", "auto"),)),
     ):
-        marble = _showcase_scene(size, meshes={"marble"}, lights={light})
+        marble = showcase_scene(size, meshes={"marble"}, lights={light})
         kind = "" if light == "point" else f"{light}_"
         name = f"renderer_marble_{kind}{size[0]}x{size[1]}_{volumetric_spp}spp.npz"
 

@@ -40,8 +40,7 @@ class HDRTarget:
 
 
 class TargetCache:
-    """One technique's frame target, kept between frames of the same size: a frame loop then allocates nothing
-    (creating the float32 colour + depth framebuffer was most of a frame's fixed cost on a real GPU)."""
+    """One technique's frame target, kept between frames of the same size: a frame loop creates no GL object."""
 
     def __init__(self):
         self.target: HDRTarget | None = None
