@@ -3,7 +3,7 @@ materials of technique packages (``translucent``, ``scratched``, whose precomput
 
 ``Scene.materials`` names this union without importing it (the scene model sits below the technique packages,
 whose passes read scenes); importing ``reflets`` imports this module first, which completes the scene model
-(``Scene.model_rebuild``). A plugin registry, as Mitsuba's: no package imports another back (``.importlinter``)."""
+(``Scene.model_rebuild``), so that no package imports another back (``.importlinter``)."""
 
 from __future__ import annotations
 
