@@ -262,13 +262,9 @@ def test_a_planar_mirror_shows_a_scratched_plate_as_the_mirrored_camera_sees_it(
     """A reflected scratched mesh is shaded with its scratch lobes, as in direct view: in a planar mirror (y = 0)
     its image is exactly the plate seen from the camera mirrored through the plane, flipped upside down
     (before, the reflection drew only the base's uncovered share: relative MSE 0.73 here)."""
-    h, w = 16, 32
-    v, u = (np.arange(h) + 0.5) / h, (np.arange(w) + 0.5) / w
-    env = np.stack(  # smooth: the comparison measures the shading, not a sun's variance
-        np.broadcast_arrays(0.6 + 0.4 * np.cos(2 * np.pi * u)[None, :], 0.4 + 0.6 * v[:, None], 0.8 - 0.5 * v[:, None]),
-        axis=-1,
-    ).astype(np.float32)
-    np.save(tmp_path / "env.npy", env)
+    from scratches.plates import MATERIAL, write_smooth_sky  # tests/scratches
+
+    write_smooth_sky(tmp_path / "env.npy")
     plate = {
         "shape": "plane",
         "size": [1.4, 1.0],
@@ -282,17 +278,7 @@ def test_a_planar_mirror_shows_a_scratched_plate_as_the_mirrored_camera_sees_it(
         return {
             "camera": {"position": [0, height, 2.2], "look_at": [0, height / 5, -0.5], "fov_y": 50, "size": [64, 48]},
             "materials": {
-                "scratched": {
-                    "type": "scratched",
-                    "profile": "vgroove:0.4",
-                    "table_size": 32,
-                    "rays": 2000,
-                    "count": 3,
-                    "spread": 120,
-                    "coverage": 0.3,
-                    "seed": 2,
-                    "base": {"type": "lambert", "albedo": [0.4, 0.3, 0.2]},
-                },
+                "scratched": MATERIAL,
                 "mirror": {"type": "mirror", "reflectance": [1, 1, 1]},
             },
             "mesh": meshes,

@@ -12,6 +12,8 @@ from reflets.scene.environment import environment_grid, load_environment, lookup
 from reflets.scratches import shading
 from reflets.techniques import get_technique
 
+from .plates import MATERIAL, write_smooth_sky
+
 SIZE = (40, 30)
 EYE = np.array([0.0, 1.3, 1.6])
 LIGHT = np.array([0.4, 1.2, -0.8])
@@ -23,16 +25,7 @@ def _cache(tmp_path, monkeypatch):
 
 
 def _plate(tmp_path, material: dict) -> dict:
-    h, w = 16, 32
-    v = (np.arange(h) + 0.5) / h
-    u = (np.arange(w) + 0.5) / w
-    env = np.stack(  # smooth: the comparison measures the estimator, not a sun's variance
-        np.broadcast_arrays(
-            0.6 + 0.4 * np.cos(2 * np.pi * u)[None, :], 0.4 + 0.6 * v[:, None], 0.8 - 0.5 * v[:, None] + 0 * u
-        ),
-        axis=-1,
-    ).astype(np.float32)
-    np.save(tmp_path / "env.npy", env)
+    write_smooth_sky(tmp_path / "env.npy")
     return {
         "camera": {"position": EYE.tolist(), "look_at": [0, 0, -0.2], "fov_y": 45, "size": list(SIZE)},
         "materials": {"m": material},
@@ -43,19 +36,6 @@ def _plate(tmp_path, material: dict) -> dict:
         ],
         "background": [0, 0, 0],
     }
-
-
-MATERIAL = {
-    "type": "scratched",
-    "profile": "vgroove:0.4",
-    "table_size": 32,
-    "rays": 2000,
-    "count": 3,
-    "spread": 120,
-    "coverage": 0.3,
-    "seed": 2,
-    "base": {"type": "lambert", "albedo": [0.4, 0.3, 0.2]},
-}
 
 
 def test_gpu_matches_numpy_twin(ctx, tmp_path):
