@@ -71,8 +71,8 @@ def test_per_channel_ring_sets_keep_the_slab_energy_and_fit_each_channel(quadrat
     """The document's β per channel: each channel integrated with its own rings (its own radius and β) keeps the
     uniformly lit slab's energy (product rule within 3 %; the bilinear rule within 3 % of its shared-ring value
     at 48 rings), and the layouts differ per channel (marble's red spreads wider than its blue)."""
-    from reflets.gpu import get_context
     from reflets.techniques import get_technique
+    from reflets.translucency.shading import ring_radii
 
     scene = slab({"preset": "marble", "profile": "better_dipole"}, OVERHEAD)
     rings_ = 48 if quadrature == "bilinear" else 12
@@ -85,8 +85,8 @@ def test_per_channel_ring_sets_keep_the_slab_energy_and_fit_each_channel(quadrat
     c = 1 - 2 * fresnel_moment(1, material.eta, inside=False)
     expected = fresnel_transmittance(1.0, material.eta) ** 2 * total_reflectance("better_dipole", material.medium())
     np.testing.assert_allclose(per, expected / (np.pi * c) if quadrature == "product" else shared, rtol=0.03)
-    technique = get_technique("translucent")(get_context(), ring_sets="per_channel")
-    radii = technique._ring_radii(material, material.medium())
+    params = get_technique("translucent").Params(ring_sets="per_channel")
+    radii = ring_radii(params, material, material.medium())
     assert radii.shape == (3, 13) and radii[0, -1] > 1.2 * radii[2, -1]
 
 

@@ -100,13 +100,7 @@ class AreaLightTechnique(Forward):
         return {"BRDF": material.glsl, "AREA": self.area_glsl}
 
     def flags(self, material) -> dict[str, object]:
-        outputs = {"radiance": 0, "position": 1, "normal": 2, "uv": 3, "samples": 4}
-        return {
-            "OUTPUT": outputs[self.params.output],
-            **self._light_flags,
-            **material.flags(),
-            **self.method_flags(),
-        }
+        return {**super().flags(material), **self.method_flags()}
 
     def method_flags(self) -> dict[str, object]:
         """Compile-time variants of the method (e.g. METHOD_VARIANT)."""
@@ -124,19 +118,19 @@ class AreaLightTechnique(Forward):
 
     def polygon_rows(self, scene: Scene) -> list[tuple]:
         rows, texels, offset = [], [], 0
-        masks = self._masks  # read by Forward.prepare
         for i, light in enumerate(scene.light):
             if not isinstance(light, QuadLight | PolygonLight):
                 continue
             slot = None
-            if i in masks:
+            mask = self.prepared.mask_of(light)
+            if mask is not None:
                 if not self.supports_masks:
                     raise SceneError(
                         f"supported by {', '.join(mask_methods())}; not by {self.name}", field=f"light[{i}].mask"
                     )
-                h, w = masks[i].shape
+                h, w = mask.shape
                 slot, offset = (offset, w, h), offset + w * h
-                texels.append(masks[i].ravel())
+                texels.append(mask.ravel())
             rows += polygon_record(light, slot)
         if offset > MAX_MASK_TEXELS:
             raise SceneError(f"the masks hold {offset} texels in all; at most {MAX_MASK_TEXELS}", field="light.mask")

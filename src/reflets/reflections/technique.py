@@ -37,15 +37,15 @@ from pydantic import Field
 
 from ..errors import ArgumentError
 from ..gpu import ProgramSpec, get_program, set_uniforms
-from ..scene.geometry import bounding_sphere, mesh_data
+from ..scene.geometry import bounding_sphere
 from ..scene.lightmask import quad_uv
 from ..scene.meshdata import MeshData
 from ..scene.model import CylinderMesh, PlaneMesh, PolygonLight, QuadLight, Scene, SphereMesh, TorusMesh
 from ..scene.surfaces import SampledSurface
 from ..scratches.lobes import LOBE_FLAGS, ScratchLobes
-from ..scratches.material import Scratched
 from ..techniques.base import register_technique
 from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams, polygon_normal
+from ..techniques.shading import shading_for
 from .scene import canonical_surface
 from .solver import SOLVERS, SURFACE_KINDS, glsl_constants
 
@@ -218,14 +218,14 @@ class Fermat(Forward):
             )
         super().prepare(scene)
         ctx = self.ctx
-        self._lobes = ScratchLobes(ctx, scene)  # reflected scratched meshes: their lobes, default sampling
+        self._lobes = ScratchLobes(self.prepared, scene)  # reflected scratched meshes: their lobes, default sampling
         self._reflectors = [
             reflector_of(scene, i, self.params.sampled) for i, mesh in enumerate(scene.mesh) if mesh.reflector
         ]
         self._grids = [r.grid_texture(ctx) for r in self._reflectors]
         self._objects += [g for g in self._grids if g is not None]
         self._gbuffer_size = None
-        meshes = [mesh_data(scene, i) for i in range(len(scene.mesh))]
+        meshes = self.prepared.meshes
         ids = {r.index: k + 1 for k, r in enumerate(self._reflectors)}
         bounds = [bounding_sphere(meshes[r.index].positions.astype(np.float64)) for r in self._reflectors]
         centres = [centre for centre, _ in bounds]
@@ -234,7 +234,7 @@ class Fermat(Forward):
         self._reflected_meshes = []  # (mesh data subdivided, material)
         self.subdivisions = []  # k per reflected mesh (emitters last), for reports
         for index, (mesh, data) in enumerate(zip(scene.mesh, meshes, strict=True)):
-            self._gbuffer_draws.append((self.mesh_vertex_array(gbuffer, data), float(ids.get(index, 0))))
+            self._gbuffer_draws.append((self.mesh_vertex_array(gbuffer, index), float(ids.get(index, 0))))
             if index not in ids:
                 k = self._subdivision(data, centres)
                 self.subdivisions.append(k)
@@ -293,7 +293,7 @@ class Fermat(Forward):
         solver = self._solver_flags(reflector)
         draws = []
         for data, material in self._reflected_meshes:
-            scratched = isinstance(material, Scratched)  # shaded with its lobes, as in direct view
+            scratched = shading_for(material, [self._lobes]) is not None  # its lobes, as in direct view
             program = get_program(
                 ctx,
                 REFLECTED_PROGRAM,
@@ -312,7 +312,7 @@ class Fermat(Forward):
                 uniforms.update(self._lobes.uniforms(material))
                 textures = {**textures, **self._lobes.textures(material)}
             draws.append((program, self.mesh_vertex_array(program, data), uniforms, textures))
-        masks = {id(light): mask for _, _, light, mask in self._emitters}  # the forward pass's mask textures
+        masks = {id(light): mask for _, _, light, mask in self.prepared.emitters}  # the emitters' mask textures
         for data, light in self._reflected_emitters:
             mask = masks.get(id(light))
             program = get_program(
@@ -414,7 +414,7 @@ class Fermat(Forward):
             if color is None:
                 from ..equirect import rotation_y
 
-                self._env_texture.use(0)
+                self.prepared.environment_texture.use(0)
                 uniforms["u_env"] = 0
                 uniforms["u_env_from_world"] = rotation_y(self.scene.environment.rotate_y).astype(np.float32).tobytes()
             else:

@@ -42,6 +42,7 @@ from ..gpu import FrameTimer
 from ..scene.model import PolygonLight, QuadLight, Scene
 from ..techniques.base import Technique, TechniqueParams, get_technique, register_technique
 from ..techniques.forward import Forward, GridSide, PassRole, check_target_size, samples_per_pixel_side
+from ..techniques.prepared import PreparedScene
 
 #: the method of a scene that names none
 DEFAULT_METHOD = "auto"
@@ -161,9 +162,13 @@ class Auto(Technique):
         plan = pass_plan(scene, self._area_method(scene))
         p = self.params
         self.passes: list[tuple[str, Technique]] = []
+        # meshes, masks, environment and emitters uploaded once for every pass (each pass's scene holds the same
+        # meshes and materials, lit by some of the lights)
+        self.prepared = PreparedScene(self.ctx, scene)
         for k, (method, pass_scene, meshes, additive) in enumerate(plan):
             technique = get_technique(method)(self.ctx, area_samples=p.area_samples, env_grid=p.env_grid)
             technique.role = PassRole(meshes=meshes, clear=k == 0, extras=k == len(plan) - 1, additive=additive)
+            technique.shared = self.prepared
             technique.prepare(pass_scene)
             self.passes.append((method, technique))
         self.final = self.passes[-1][1]  # full scene: its clip planes and camera serve every pass
@@ -238,4 +243,7 @@ class Auto(Technique):
         for _, technique in getattr(self, "passes", []):
             technique.release()
         self.passes = []
+        if getattr(self, "prepared", None) is not None:
+            self.prepared.release()
+        self.prepared = None
         self._targets.release()

@@ -1,23 +1,34 @@
 """The GPU side of a scratched material's lobes (``shaders/scratch_lobes.glsl``): its compile-time flags, uniforms
-and textures (scratch table, per-row CDF, mip-mapped α maps, the environment), made once per material and
-scene. The ``scratches`` pass shades scratched meshes with them, and the ``fermat`` pass shades their
-reflections with the same code, so a scratched plate looks the same in a mirror as in direct view."""
+and textures (scratch table, per-row CDF, mip-mapped α maps; the environment from the prepared scene), made once
+per material and scene. ``ScratchLobes`` is the shading of scratched materials: the ``scratches`` pass draws
+scratched meshes with it, and the ``fermat`` pass shades their reflections with the same code, so a scratched
+plate looks the same in a mirror as in direct view."""
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import moderngl
 import numpy as np
 
 from ..equirect import rotation_y
-from ..scene.environment import load_environment
+from ..gpu import ProgramSpec
+from ..techniques.forward import LIGHT_FLAGS
+from ..techniques.prepared import PreparedScene
+from ..techniques.shading import MaterialShading
 from .material import Scratched
 
 #: compile-time flags of scratch_lobes.glsl (a program that includes it declares them)
 LOBE_FLAGS = frozenset({"S_LAYERS", "S_TABLE", "S_LOG2", "S_ENV_SAMPLES", "S_LIGHT_SAMPLES", "S_CONSTANT_ALPHA"})
+#: a scratched mesh in a forward pass: the base BRDF lit as the forward pass does, plus the lobes
+SCRATCHES_PROGRAM = ProgramSpec(
+    "scratches",
+    vertex="reflets/techniques/shaders/mesh.vert",
+    fragment="reflets/scratches/shaders/scratches.frag",
+    flags=LOBE_FLAGS | LIGHT_FLAGS | {"OUTPUT"},
+)
 #: anisotropic filtering of the α maps (grazing views of a plate keep their detail along the view)
 ANISOTROPY = 16.0
 
@@ -32,20 +43,20 @@ class LobeSettings:
     table_backend: str = "auto"  # "auto" (the GPU tracer with a context), "numpy" or "gpu"
 
 
-class ScratchLobes:
-    """Flags, uniforms and textures of the scratched materials of one scene, on one context."""
+class ScratchLobes(MaterialShading):
+    """Flags, uniforms and textures of the scratched materials of one pass's scene (lit by its lights: the
+    environment is sampled when that scene has one), on a prepared scene's context."""
 
-    def __init__(self, ctx, scene, settings: LobeSettings = LobeSettings()):
-        self.ctx = ctx
+    material_type: ClassVar[type] = Scratched
+    program: ClassVar[ProgramSpec] = SCRATCHES_PROGRAM
+
+    def __init__(self, prepared: PreparedScene, scene, settings: LobeSettings = LobeSettings()):
+        self.ctx = prepared.ctx
         self.scene = scene
         self.settings = settings
+        self._env_texture = prepared.environment_texture if scene.environment is not None else None
         self._textures: dict[str, dict[str, object]] = {}
         self._objects: list = []
-
-    @functools.cached_property
-    def _env_image(self):
-        """The environment map, read when a scratched material first needs it (a pass may have none)."""
-        return load_environment(self.scene)
 
     def table_of(self, material: Scratched):
         """The material's scratch table as these settings compute it."""
@@ -60,7 +71,7 @@ class ScratchLobes:
             "S_LAYERS": material.layer_count,
             "S_TABLE": table.size,
             "S_LOG2": max(1, math.ceil(math.log2(table.size))),
-            "S_ENV_SAMPLES": self.settings.samples if self._env_image is not None else 0,
+            "S_ENV_SAMPLES": self.settings.samples if self._env_texture is not None else 0,
             "S_LIGHT_SAMPLES": self.settings.light_samples,
             "S_CONSTANT_ALPHA": int(material.coverage is not None),
         }
@@ -127,10 +138,6 @@ class ScratchLobes:
             tex.repeat_x = tex.repeat_y = True
             self._objects.append(tex)
             textures["s_alpha"] = tex
-        if self._env_image is not None:
-            env = self._env_image
-            tex = self.ctx.texture((env.shape[1], env.shape[0]), 3, env.tobytes(), dtype="f4")
-            tex.repeat_x, tex.repeat_y = True, False
-            self._objects.append(tex)
-            textures["s_env"] = tex
+        if self._env_texture is not None:
+            textures["s_env"] = self._env_texture  # the prepared scene's
         return textures

@@ -25,20 +25,9 @@ from typing import ClassVar, Literal
 from pydantic import Field
 
 from ..errors import ArgumentError
-from ..gpu import ProgramSpec
 from ..techniques.base import register_technique
-from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams
-from .lobes import LOBE_FLAGS, LobeSettings, ScratchLobes
-from .material import Scratched
-
-_SHADERS = "reflets/scratches/shaders/"
-SCRATCH_FLAGS = LOBE_FLAGS | {"OUTPUT"}
-SCRATCHES_PROGRAM = ProgramSpec(
-    "scratches",
-    vertex="reflets/techniques/shaders/mesh.vert",
-    fragment=_SHADERS + "scratches.frag",
-    flags=SCRATCH_FLAGS | LIGHT_FLAGS,
-)
+from ..techniques.forward import Forward, ForwardParams
+from .lobes import LobeSettings, ScratchLobes
 
 
 class ScratchesParams(ForwardParams):
@@ -68,31 +57,10 @@ class Scratches(Forward):
     Params: ClassVar = ScratchesParams
     auto_order: ClassVar[int] = 1
 
-    def prepare(self, scene) -> None:
-        self.release()  # the previous scene's lobes too (Forward.prepare releases again: then nothing is held)
+    def material_shadings(self, scene) -> list:
         p = self.params
-        self.lobes = ScratchLobes(
-            self.ctx, scene, LobeSettings(p.samples, p.light_samples, p.thickness, p.table_backend)
-        )
-        super().prepare(scene)
-
-    def program_for(self, material) -> ProgramSpec:
-        return SCRATCHES_PROGRAM if isinstance(material, Scratched) else self.program_spec
-
-    def flags(self, material) -> dict[str, object]:
-        base = super().flags(material)
-        return {**base, **self.lobes.flags(material)} if isinstance(material, Scratched) else base
-
-    def material_uniforms(self, material) -> dict[str, object]:
-        return self.lobes.uniforms(material) if isinstance(material, Scratched) else {}
-
-    def material_textures(self, material) -> dict[str, object]:
-        return self.lobes.textures(material) if isinstance(material, Scratched) else {}
-
-    def release(self) -> None:
-        if hasattr(self, "lobes"):
-            self.lobes.release()
-        super().release()
+        settings = LobeSettings(p.samples, p.light_samples, p.thickness, p.table_backend)
+        return [ScratchLobes(self.prepared, scene, settings)]
 
     @property
     def default_spp(self) -> int:
@@ -108,5 +76,3 @@ class Scratches(Forward):
             )
         return spp // n, 1
 
-    def frame_uniforms(self, frame: int, seed: int) -> dict[str, object]:
-        return ScratchLobes.frame_uniforms(frame, seed)

@@ -29,12 +29,15 @@ from pydantic import Field
 from ..equirect import rotation_y
 from ..errors import ArgumentError
 from ..gpu import FrameTimer, ProgramSpec, get_program, set_uniforms
-from ..scene.environment import environment_grid, load_environment
-from ..scene.geometry import bounding_sphere, clip_planes_of_sphere, mesh_data
-from ..scene.lightmask import load_masks, mask_lookup, quad_uv
+from ..scene.environment import environment_grid
+from ..scene.geometry import clip_planes_of_sphere
+from ..scene.lightmask import mask_lookup
+from ..scene.meshdata import MeshData
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
 from .base import Technique, TechniqueParams, register_technique
+from .prepared import PreparedScene
+from .shading import MaterialShading, shading_for
 
 _SHADERS = "reflets/techniques/shaders/"
 #: compile-time light counts of lights.glsl (every program that includes it declares them)
@@ -45,15 +48,12 @@ MESH_PROGRAM = ProgramSpec(
     fragment=_SHADERS + "forward.frag",
     flags=frozenset({"OUTPUT"}) | LIGHT_FLAGS,
 )
-EMITTER_PROGRAM = ProgramSpec(
-    "emitter", vertex=_SHADERS + "emitter.vert", fragment=_SHADERS + "emitter.frag", flags=frozenset({"EMITTER_MASK"})
-)
 BACKGROUND_PROGRAM = ProgramSpec(
     "background", vertex=_SHADERS + "background.vert", fragment=_SHADERS + "background.frag"
 )
 #: one side of the environment grid (nu or nv): 1…1024 distant lights
 GridSide = Annotated[int, Field(ge=1, le=1024)]
-_OUTPUTS = {"radiance": 0, "position": 1, "normal": 2, "uv": 3}
+_OUTPUTS = {"radiance": 0, "position": 1, "normal": 2, "uv": 3, "samples": 4}  # samples: the area-light methods
 
 
 class ForwardParams(TechniqueParams):
@@ -148,31 +148,30 @@ class Forward(Technique):
     #: the part of a frame this technique draws (a composed frame sets it before ``prepare``)
     role: PassRole = WHOLE_FRAME
 
+    #: GPU state shared with the other passes of a composed frame (``auto`` sets it before ``prepare``; None: the
+    #: technique prepares and releases its own)
+    shared: PreparedScene | None = None
+
     def prepare(self, scene: Scene) -> None:
         ctx = self.ctx
         self.release()
         self.scene = scene
         self._objects = []
-        points = []  # every mesh vertex and light corner: the clip planes must hold them all
-        self._masks = load_masks(scene)  # read once: the area samples, polygon records and emitters use them
+        self.prepared = self.shared if self.shared is not None else PreparedScene(ctx, scene)
+        self._owns_prepared = self.shared is None
 
-        points_l, dirs, area, emitters, emitter_indices = [], [], [], [], []
-        for light_index, light in enumerate(scene.light):
+        points_l, dirs, area = [], [], []
+        for light in scene.light:
             if isinstance(light, PointLight):
                 points_l += [(*light.position, 1.0), (*light.intensity, 0.0)]
             elif isinstance(light, DirectionalLight):
                 d = -np.asarray(light.direction, dtype=np.float64)
                 dirs += [(*(d / np.linalg.norm(d)), 0.0), (*light.irradiance, 0.0)]
             elif isinstance(light, QuadLight | PolygonLight):
-                poly = light.polygon()
-                points.append(poly)
                 area += self.area_light_rows(light)
-                emitters.append((poly, light))
-                emitter_indices.append(light_index)
-        env_image = load_environment(scene)
         env = []
-        if env_image is not None:
-            env_dirs, env_power = environment_grid(env_image, scene.environment, self.params.env_grid)
+        if scene.environment is not None:
+            env_dirs, env_power = environment_grid(self.prepared.environment, scene.environment, self.params.env_grid)
             keep = np.any(env_power > 0, axis=1)
             for d, pw in zip(env_dirs[keep], env_power[keep], strict=True):
                 env += [(*d, 0.0), (*pw, 0.0)]
@@ -189,75 +188,65 @@ class Forward(Technique):
         }
         self._light_buffers = [self._ssbo(rows) for rows in (points_l, dirs, area, env, polygons)]
 
+        self.shadings = self.material_shadings(scene)
         self._draws = []
         for index, mesh in enumerate(scene.mesh):
-            data = mesh_data(scene, index)
-            points.append(data.positions)
             if not self.role.shades(index):
                 self._draws.append(None)  # another pass of a composed frame shades this mesh
                 continue
-            material = scene.materials[mesh.material]
-            spec = self.program_for(material)
-            program = get_program(ctx, spec, slots=self.slots(material), **self.flags(material))
-            vao = self.mesh_vertex_array(program, data)
-            uniforms = {**material.uniforms(), **self.material_uniforms(material)}
-            textures = {**material.textures(ctx), **self.material_textures(material)}
-            self._draws.append((program, vao, uniforms, textures))
-
-        self._emitters = []
-        masks = self._masks
-        for index, (poly, light) in zip(emitter_indices, emitters, strict=True):
-            tri = np.array([[poly[0], poly[k], poly[k + 1]] for k in range(1, len(poly) - 1)]).reshape(-1, 3)
-            uv = np.stack(quad_uv(light, tri), axis=-1) if isinstance(light, QuadLight) else np.zeros((len(tri), 2))
-            vbo = ctx.buffer(np.concatenate([tri, uv], axis=1).astype(np.float32).tobytes())
-            program = get_program(ctx, EMITTER_PROGRAM, EMITTER_MASK=int(index in masks))
-            vao = ctx.vertex_array(program, [(vbo, "3f 2f", "in_position", "in_uv")], skip_errors=True)
-            self._objects += [vbo, vao]
-            texture = None
-            if index in masks:
-                mask = masks[index]
-                texture = ctx.texture((mask.shape[1], mask.shape[0]), 1, mask.tobytes(), dtype="f4")
-                texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
-                texture.repeat_x = texture.repeat_y = False
-                self._objects.append(texture)
-            self._emitters.append((program, vao, light, texture))
+            self._draws.append(self._mesh_draw(index, scene.materials[mesh.material]))
 
         self._background = get_program(ctx, BACKGROUND_PROGRAM)
         self._background_vao = ctx.vertex_array(self._background, [])
         self._objects.append(self._background_vao)
-        self._env_texture = None
-        if env_image is not None:
-            tex = ctx.texture((env_image.shape[1], env_image.shape[0]), 3, env_image.tobytes(), dtype="f4")
-            tex.repeat_x, tex.repeat_y = True, False
-            self._env_texture = tex
-            self._objects.append(tex)
-        cam = scene.camera
-        all_points = np.concatenate(points) if points else np.zeros((0, 3))
-        self._bounds = bounding_sphere(all_points) if len(all_points) else (None, 0.0)
-        self._near, self._far = clip_planes_of_sphere(np.asarray(cam.position, dtype=np.float64), *self._bounds)
+        self._bounds = self.prepared.bounds
+        self._near, self._far = clip_planes_of_sphere(np.asarray(scene.camera.position, np.float64), *self._bounds)
         self.timer = FrameTimer(ctx)
 
-    # ------------------------------------------------------------------ hooks for techniques built on this pass
-    #: the mesh shading program (techniques swap the fragment stage)
+    def _mesh_draw(self, index: int, material) -> tuple:
+        """(program, vertex array, uniforms, material textures, shading textures, shading) of one mesh: drawn
+        with the shading of its material's type, or this technique's own BRDF shading."""
+        ctx = self.ctx
+        shading = shading_for(material, self.shadings)
+        if shading is None:
+            program = get_program(ctx, self.program_spec, slots=self.slots(material), **self.flags(material))
+            uniforms = {**material.uniforms(), **self.material_uniforms(material)}
+            own_textures = self.material_textures(material)
+        else:
+            flags = {**self.pass_flags(), **material.flags(), **shading.flags(material)}
+            program = get_program(ctx, shading.program, slots=shading.slots(material), **flags)
+            uniforms = {**material.uniforms(), **shading.uniforms(material)}
+            own_textures = shading.textures(material)
+        vao = self.mesh_vertex_array(program, index)
+        return program, vao, uniforms, material.textures(ctx), own_textures, shading
+
+    # ------------------------------------------------------------------ how this technique shades
+    def material_shadings(self, scene: Scene) -> list[MaterialShading]:
+        """The shadings of the material types this technique exists for (translucent, scratched…); every
+        other material gets the technique's own BRDF shading (``program_spec``, ``slots``, ``flags``,
+        ``material_uniforms``, ``material_textures``). None here."""
+        return []
+
+    #: the program of the technique's own BRDF shading (the area-light methods swap the fragment stage)
     program_spec: ClassVar[ProgramSpec] = MESH_PROGRAM
 
-    def program_for(self, material) -> ProgramSpec:
-        """The mesh program of a material (techniques that shade some materials specially override this)."""
-        return self.program_spec
-
     def slots(self, material) -> dict[str, str]:
-        """GLSL include slots of the mesh program for one material."""
+        """GLSL include slots of the BRDF shading's program for one material."""
         return {"BRDF": material.glsl}
 
+    def pass_flags(self) -> dict[str, object]:
+        """Flags every mesh program of this pass takes: the output and the light counts."""
+        return {"OUTPUT": _OUTPUTS[self.params.output], **self._light_flags}
+
     def flags(self, material) -> dict[str, object]:
-        return {"OUTPUT": _OUTPUTS[self.params.output], **self._light_flags, **material.flags()}
+        return {**self.pass_flags(), **material.flags()}
 
     def material_uniforms(self, material) -> dict[str, object]:
         """Per-draw uniforms a technique adds for a material (besides the material's own)."""
         return {}
 
     def material_textures(self, material) -> dict[str, object]:
-        """Per-draw textures a technique adds for a material, by sampler uniform name (bound after the
+        """Per-draw textures the BRDF shading adds for a material, by sampler uniform name (bound after the
         material's own, from texture unit 1 on); the technique releases them (e.g. via ``self._objects``)."""
         return {}
 
@@ -268,7 +257,7 @@ class Forward(Technique):
         n = self.params.area_samples
         pts, dA = area_light_samples(poly, n)
         weight = np.ones(len(pts))
-        mask = self._masks.get(self.scene.light.index(light))
+        mask = self.prepared.mask_of(light)
         if mask is not None:  # a quad: the n × n grid in area_light_samples' order; masked-out samples dropped
             t = (np.arange(n) + 0.5) / n
             u, v = np.meshgrid(t, t, indexing="xy")
@@ -296,17 +285,11 @@ class Forward(Technique):
         anti-alias with s×s samples."""
         return 1, samples_per_pixel_side(spp)
 
-    def mesh_vertex_array(self, program, data):
-        """A vertex array of one mesh for a program of mesh.vert's layout (buffers owned by this technique)."""
-        vbo = self.ctx.buffer(data.interleaved().tobytes())
-        ibo = self.ctx.buffer(data.indices.tobytes())
-        vao = self.ctx.vertex_array(
-            program,
-            [(vbo, "3f 3f 4f 2f", "in_position", "in_normal", "in_tangent", "in_uv")],
-            ibo,
-            skip_errors=True,
-        )
-        self._objects += [vbo, ibo, vao]
+    def mesh_vertex_array(self, program, mesh: int | MeshData):
+        """A vertex array of mesh ``mesh`` (a scene index: the prepared scene's buffers; or any ``MeshData``) for a
+        program of mesh.vert's layout, owned by this technique."""
+        vao = self.prepared.vertex_array(program, mesh)
+        self._objects.append(vao)
         return vao
 
     def _ssbo(self, rows: list[tuple]):
@@ -368,6 +351,8 @@ class Forward(Technique):
     def _draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
         ctx = self.ctx
         role = self.role
+        for shading in self.shadings:  # what the meshes read: light views, screen-space maps
+            shading.draw_inputs(target, vp_bytes)
         radiance = self.params.output == "radiance"  # AOVs keep 0 where no surface is seen
         color = self.scene.background_color() if radiance else (0.0, 0.0, 0.0)
         if role.clear:
@@ -384,20 +369,17 @@ class Forward(Technique):
         for i, buf in enumerate(self._light_buffers):
             buf.bind_to_storage_buffer(i)
         eye = tuple(float(c) for c in self.scene.camera.position)
-        for program, vao, uniforms, textures in filter(None, self._draws):
+        per_frame = self.frame_uniforms(frame, seed)
+        for program, vao, uniforms, material_textures, own_textures, shading in filter(None, self._draws):
             samplers = {}
+            textures = {**material_textures, **own_textures}
             for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
                 texture.use(unit)
                 samplers[name] = unit
-            uniforms = {**uniforms, **samplers}
+            shading_frame = shading.frame_uniforms(frame, seed) if shading is not None else {}
             set_uniforms(
                 program,
-                {
-                    "u_view_proj": vp_bytes,
-                    "u_eye": eye,
-                    **uniforms,
-                    **self.frame_uniforms(frame, seed),
-                },
+                {"u_view_proj": vp_bytes, "u_eye": eye, **uniforms, **samplers, **per_frame, **shading_frame},
             )
             vao.render()
         if role.additive:
@@ -407,7 +389,7 @@ class Forward(Technique):
         if not role.extras:
             ctx.disable(ctx.DEPTH_TEST)
             return
-        for emitter_program, vao, light, mask in self._emitters if self.params.output == "radiance" else []:
+        for emitter_program, vao, light, mask in self.prepared.emitters if self.params.output == "radiance" else []:
             if mask is not None:
                 mask.use(1)
             set_uniforms(
@@ -431,7 +413,7 @@ class Forward(Technique):
     def _draw_background(self, view_proj: np.ndarray) -> None:
         """The environment map along every camera ray (a full-screen triangle at the far plane)."""
         rot = rotation_y(self.scene.environment.rotate_y)
-        self._env_texture.use(0)
+        self.prepared.environment_texture.use(0)
         uniforms = {
             "u_inv_view_proj": np.linalg.inv(view_proj).T.astype(np.float32).tobytes(),
             "u_env_from_world": rot.astype(np.float32).tobytes(),  # R^T: column-major bytes of row-major R
@@ -441,9 +423,15 @@ class Forward(Technique):
         self._background_vao.render(vertices=3)
 
     def release(self) -> None:
+        for shading in getattr(self, "shadings", []):
+            shading.release()
+        self.shadings = []
         for obj in getattr(self, "_objects", []):
             obj.release()
         self._objects = []
+        if getattr(self, "_owns_prepared", False):
+            self.prepared.release()
+        self._owns_prepared = False
         self._targets.release()
 
 

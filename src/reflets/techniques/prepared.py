@@ -1,0 +1,112 @@
+"""The GPU state of one scene that every pass of a frame shares, built once.
+
+A frame composed by ``auto`` runs several passes over the same scene (the BRDF pass, translucent light views,
+scratch lobes, Fermat reflections). What they all read — the meshes' vertex and index buffers, the quad-light
+masks, the environment map and its texture, the emitters' geometry, the bounding sphere that fixes the clip
+planes — lives here once instead of once per pass; each pass keeps only what is its own (programs, vertex
+arrays binding these buffers to them, light buffers shaped for its method, its tables). A whole-frame method
+makes one for itself; ``auto`` makes one and hands it to every pass (``Technique.shared``). Whoever made it
+releases it.
+"""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from ..gpu import ProgramSpec, get_program
+from ..scene.environment import load_environment
+from ..scene.geometry import bounding_sphere, mesh_data
+from ..scene.lightmask import load_masks, quad_uv
+from ..scene.meshdata import MeshData
+from ..scene.model import PolygonLight, QuadLight, Scene
+
+_SHADERS = "reflets/techniques/shaders/"
+EMITTER_PROGRAM = ProgramSpec(
+    "emitter", vertex=_SHADERS + "emitter.vert", fragment=_SHADERS + "emitter.frag", flags=frozenset({"EMITTER_MASK"})
+)
+#: the vertex layout of mesh.vert (and every program that draws scene meshes)
+MESH_LAYOUT = ("3f 3f 4f 2f", "in_position", "in_normal", "in_tangent", "in_uv")
+
+
+class PreparedScene:
+    """Meshes, masks, environment and emitters of one scene on one context (see the module docstring)."""
+
+    def __init__(self, ctx, scene: Scene):
+        self.ctx = ctx
+        self.scene = scene
+        self._objects: list = []
+        self._mesh_buffers: dict[int, tuple] = {}  # mesh index → (vbo, ibo), uploaded when a pass first draws it
+        #: world-space triangles of every mesh (the content-keyed cache's objects: read-only)
+        self.meshes: list[MeshData] = [mesh_data(scene, i) for i in range(len(scene.mesh))]
+        self._masks = load_masks(scene)  # by light index in this scene; passes ask by light (``mask_of``)
+        #: the environment map (H, W, 3) float32 × its scale, or None; its texture (repeat in u) or None
+        self.environment = load_environment(scene)
+        self.environment_texture = None
+        if self.environment is not None:
+            env = self.environment
+            tex = ctx.texture((env.shape[1], env.shape[0]), 3, env.tobytes(), dtype="f4")
+            tex.repeat_x, tex.repeat_y = True, False
+            self.environment_texture = self._own(tex)
+        self.emitters = [self._emitter(i, light) for i, light in enumerate(scene.light) if _is_area(light)]
+        points = [m.positions for m in self.meshes] + [light.polygon() for light in scene.light if _is_area(light)]
+        all_points = np.concatenate(points) if points else np.zeros((0, 3))
+        #: (centre, radius) of every mesh vertex and emitter corner, (None, 0) for an empty scene: the clip planes
+        self.bounds = bounding_sphere(all_points) if len(all_points) else (None, 0.0)
+
+    def mask_of(self, light) -> np.ndarray | None:
+        """The mask of a light of this scene (a pass's scene may hold a subset of the lights: found by identity)."""
+        for index, candidate in enumerate(self.scene.light):
+            if candidate is light:
+                return self._masks.get(index)
+        return None
+
+    def vertex_array(self, program, mesh: int | MeshData):
+        """A vertex array binding mesh ``mesh`` (an index: the shared buffers; or any ``MeshData``, e.g. a
+        subdivided copy: buffers of its own, released with this scene) to a program of mesh.vert's layout.
+        The caller owns the vertex array."""
+        if isinstance(mesh, int):
+            if mesh not in self._mesh_buffers:
+                self._mesh_buffers[mesh] = self._upload(self.meshes[mesh])
+            vbo, ibo = self._mesh_buffers[mesh]
+        else:
+            vbo, ibo = self._upload(mesh)
+        layout, *names = MESH_LAYOUT
+        return self.ctx.vertex_array(program, [(vbo, layout, *names)], ibo, skip_errors=True)
+
+    def _upload(self, data: MeshData) -> tuple:
+        vbo = self._own(self.ctx.buffer(data.interleaved().tobytes()))
+        ibo = self._own(self.ctx.buffer(data.indices.tobytes()))
+        return vbo, ibo
+
+    def _emitter(self, index: int, light) -> tuple:
+        """(program, vertex array, light, mask texture or None) drawing an area light's emitting face."""
+        ctx = self.ctx
+        poly = light.polygon()
+        tri = np.array([[poly[0], poly[k], poly[k + 1]] for k in range(1, len(poly) - 1)]).reshape(-1, 3)
+        uv = np.stack(quad_uv(light, tri), axis=-1) if isinstance(light, QuadLight) else np.zeros((len(tri), 2))
+        vbo = self._own(ctx.buffer(np.concatenate([tri, uv], axis=1).astype(np.float32).tobytes()))
+        mask = self._masks.get(index)
+        program = get_program(ctx, EMITTER_PROGRAM, EMITTER_MASK=int(mask is not None))
+        vao = self._own(ctx.vertex_array(program, [(vbo, "3f 2f", "in_position", "in_uv")], skip_errors=True))
+        texture = None
+        if mask is not None:
+            texture = ctx.texture((mask.shape[1], mask.shape[0]), 1, mask.tobytes(), dtype="f4")
+            texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            texture.repeat_x = texture.repeat_y = False
+            self._own(texture)
+        return program, vao, light, texture
+
+    def _own(self, obj):
+        self._objects.append(obj)
+        return obj
+
+    def release(self) -> None:
+        for obj in self._objects:
+            obj.release()
+        self._objects = []
+        self._mesh_buffers = {}
+
+
+def _is_area(light) -> bool:
+    return isinstance(light, QuadLight | PolygonLight)
