@@ -75,4 +75,3 @@ class Scratches(Forward):
                 field="spp",
             )
         return spp // n, 1
-
