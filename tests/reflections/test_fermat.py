@@ -130,7 +130,7 @@ def test_teapot_image_matches_the_ray_traced_reference(ctx):
     scene = reflets.load_scene(scenes_dir() / "40_reflect_teapot_sphere.toml")
     size = (200, 150)
     image = reflets.render(scene, method="fermat", size=size)
-    ref = reflets.reference(scene, spp=1, size=size, visibility=False, progress=False)
+    ref = reflets.reference(scene, spp=1, size=size, progress=False)  # shadows traced, as the GPU maps them
     assert relmse(image, ref.image) < 0.02
     assert flip(image, ref.image) < 0.03
     # the reflection is really there: without it (forward shows the mirror's non-specular part only) far worse
@@ -156,6 +156,12 @@ def test_only_the_reflectors_pixels_change(ctx):
 
 def test_subdivision_bends_reflected_edges_towards_the_reference(ctx):
     scene = reflets.load_scene(scenes_dir() / "41_reflect_room.toml")
+    data = scene.model_dump(exclude={"base_dir"})
+    for light in data["light"]:
+        light.pop("shadows", None)  # the quad light has none on the GPU yet: compare unshadowed images
+        if light["type"] == "point":
+            light["shadows"] = False
+    scene = reflets.load_dict(data, base_dir=scene.base_dir)
     size = (160, 120)
     ref = reflets.reference(scene, spp=1, size=size, visibility=False, progress=False)
     coarse = relmse(reflets.render(scene, method="fermat", size=size, subdivide=1), ref.image)
@@ -252,7 +258,7 @@ def test_bezier_mirror_matches_the_ray_traced_reference(ctx):
     scene = reflets.load_scene(scenes_dir() / "42_reflect_bezier.toml")
     size = (160, 120)
     image = reflets.render(scene, method="fermat", size=size)
-    ref = reflets.reference(scene, spp=1, size=size, visibility=False, progress=False)
+    ref = reflets.reference(scene, spp=1, size=size, progress=False)  # shadows traced, as the GPU maps them
     assert relmse(image, ref.image) < 0.03
     assert flip(image, ref.image) < 0.03
     assert relmse(reflets.render(scene, method="forward", size=size), ref.image) > 5 * relmse(image, ref.image)

@@ -2,7 +2,7 @@
 
 from .context import get_context, gl_info, is_software
 from .programs import ProgramSpec, get_program, set_uniforms
-from .targets import HDRTarget, TargetCache
+from .targets import HDRTarget, TargetCache, release_objects
 from .timing import FrameTimer
 
 __all__ = [
@@ -14,5 +14,6 @@ __all__ = [
     "set_uniforms",
     "HDRTarget",
     "TargetCache",
+    "release_objects",
     "FrameTimer",
 ]

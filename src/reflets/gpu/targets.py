@@ -32,11 +32,16 @@ class HDRTarget:
         return np.ascontiguousarray(data[::-1, :, :components])
 
     def release(self) -> None:
-        # Bind the default framebuffer first: moderngl restores the last bound framebuffer when it creates
-        # the next one, and a deleted one there raises GL_INVALID_OPERATION.
-        self.ctx.detect_framebuffer(0).use()
-        for obj in (self.fbo, self.color, self.depth):
-            obj.release()
+        release_objects(self.ctx, [self.fbo, self.color, self.depth])
+
+
+def release_objects(ctx, objects: list) -> None:
+    """Release GL objects, the default framebuffer bound first: moderngl restores the last bound framebuffer
+    when it creates the next one, and a deleted one there raises GL_INVALID_OPERATION."""
+    if objects:
+        ctx.detect_framebuffer(0).use()
+    for obj in objects:
+        obj.release()
 
 
 class TargetCache:

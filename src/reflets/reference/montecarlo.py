@@ -12,7 +12,8 @@ streams seeded by (seed, chunk), so the same seed gives the same image. The per-
 the sample standard deviation / √spp.
 
 ``visibility=False`` drops shadow tests (the area-light document's unoccluded setting): light samples are
-never blocked, BRDF samples test only the emitters, the environment is always seen.
+never blocked, BRDF samples test only the emitters, the environment is always seen. A light with
+``shadows = false`` is traced that way alone.
 ``pixel="center"`` traces every sample through the pixel centre — exactly what the GPU renderer samples —
 while ``pixel="box"`` jitters it over the pixel (what Mitsuba's box filter integrates).
 """
@@ -214,7 +215,7 @@ class MonteCarloReference:
                 dist = np.full(len(x), 2.0 * geo.radius + np.linalg.norm(x - geo.centre, axis=-1))
                 radiance = np.broadcast_to(np.asarray(light.irradiance, dtype=np.float64), x.shape)
             fcos, _ = brdf(wi)
-            visible = self._unoccluded(origin, wi, dist)
+            visible = self._unoccluded(origin, wi, dist, light)
             result += np.where(visible[:, None], fcos * radiance, 0.0)
 
         # One BRDF sample shared by the area lights and the environment.
@@ -269,8 +270,8 @@ class MonteCarloReference:
                 result[escaped] += add
         return result
 
-    def _unoccluded(self, origin: np.ndarray, wi: np.ndarray, dist: np.ndarray) -> np.ndarray:
-        if not self.visibility:
+    def _unoccluded(self, origin: np.ndarray, wi: np.ndarray, dist: np.ndarray, light=None) -> np.ndarray:
+        if not self.visibility or not getattr(light, "shadows", True):
             return np.ones(len(origin), dtype=bool)
         return ~self.geometry.occluded(origin, wi, dist)
 

@@ -36,7 +36,7 @@ import numpy as np
 from pydantic import Field
 
 from ..errors import ArgumentError
-from ..gpu import ProgramSpec, get_program, set_uniforms
+from ..gpu import ProgramSpec, get_program, release_objects, set_uniforms
 from ..scene.geometry import bounding_sphere
 from ..scene.lightmask import quad_uv
 from ..scene.meshdata import MeshData
@@ -46,6 +46,7 @@ from ..scratches.lobes import LOBE_FLAGS, ScratchLobes
 from ..techniques.base import register_technique
 from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams, polygon_normal
 from ..techniques.shading import shading_for
+from ..techniques.shadows import SHADOW_UNIT
 from .scene import canonical_surface
 from .solver import SOLVERS, SURFACE_KINDS, glsl_constants
 
@@ -386,6 +387,7 @@ class Fermat(Forward):
                 "u_gbuffer_normal": GBUFFER_UNITS[1],
                 "u_reflector_id": reflector_id,
                 "u_hidden_tolerance": self.params.hidden_tolerance * size,
+                "u_shadow_atlas": SHADOW_UNIT,  # bound by the forward pass
                 **ScratchLobes.frame_uniforms(frame, seed),  # reflected scratched meshes sample per frame
             }
             for program, vao, uniforms, textures in draws:
@@ -453,9 +455,7 @@ class Fermat(Forward):
             vao.transform(out, mode=moderngl.POINTS, vertices=len(vertices))
             result = np.frombuffer(out.read(), dtype=np.float32).reshape(-1, 9).astype(np.float64)
         finally:
-            ctx.detect_framebuffer(0).use()  # see HDRTarget.release
-            for obj in (vao, out, vbo, fbo):
-                obj.release()
+            release_objects(ctx, [vao, out, vbo, fbo])
         return {
             "position": result[:, 0:3],
             "normal": result[:, 3:6],

@@ -232,6 +232,7 @@ class PointLight(Strict):
     type: Literal["point"]
     position: Vec3
     intensity: Color
+    shadows: bool = Field(True, description="casts shadows (GPU: a cube shadow map; the reference: shadow rays)")
 
 
 class DirectionalLight(Strict):
@@ -241,6 +242,7 @@ class DirectionalLight(Strict):
     type: Literal["directional"]
     direction: Vec3
     irradiance: Color
+    shadows: bool = Field(True, description="casts shadows (GPU: a shadow map over the scene; the reference: rays)")
 
     @field_validator("direction")
     @classmethod

@@ -14,7 +14,7 @@ import moderngl
 import numpy as np
 
 from ..equirect import rotation_y
-from ..gpu import ProgramSpec
+from ..gpu import ProgramSpec, release_objects
 from ..techniques.forward import LIGHT_FLAGS
 from ..techniques.prepared import PreparedScene
 from ..techniques.shading import MaterialShading
@@ -100,8 +100,7 @@ class ScratchLobes(MaterialShading):
         return {"u_frame": int(frame) & 0xFFFFFFFF, "u_seed": (s ^ (s >> 32)) & 0xFFFFFFFF}
 
     def release(self) -> None:
-        for obj in self._objects:
-            obj.release()
+        release_objects(self.ctx, self._objects)
         self._objects = []
         self._textures = {}
 

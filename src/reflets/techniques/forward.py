@@ -28,7 +28,7 @@ from pydantic import Field
 
 from ..equirect import rotation_y
 from ..errors import ArgumentError
-from ..gpu import FrameTimer, ProgramSpec, get_program, set_uniforms
+from ..gpu import FrameTimer, ProgramSpec, get_program, release_objects, set_uniforms
 from ..scene.environment import environment_grid
 from ..scene.geometry import clip_planes_of_sphere
 from ..scene.lightmask import mask_lookup
@@ -38,10 +38,11 @@ from ..scene.transform import look_at, perspective
 from .base import Technique, TechniqueParams, register_technique
 from .prepared import PreparedScene
 from .shading import MaterialShading, shading_for
+from .shadows import SHADOW_UNIT
 
 _SHADERS = "reflets/techniques/shaders/"
 #: compile-time light counts of lights.glsl (every program that includes it declares them)
-LIGHT_FLAGS = frozenset({"N_POINT", "N_DIR", "N_AREA", "N_ENV"})
+LIGHT_FLAGS = frozenset({"N_POINT", "N_DIR", "N_AREA", "N_ENV", "SHADOW_VIEWS"})
 MESH_PROGRAM = ProgramSpec(
     "forward",
     vertex=_SHADERS + "mesh.vert",
@@ -161,12 +162,13 @@ class Forward(Technique):
         self._owns_prepared = self.shared is None
 
         points_l, dirs, area = [], [], []
-        for light in scene.light:
+        shadows = self.prepared.shadows
+        for light in scene.light:  # w of a delta light's second row: its first shadow view + 1 (0: no shadow)
             if isinstance(light, PointLight):
-                points_l += [(*light.position, 1.0), (*light.intensity, 0.0)]
+                points_l += [(*light.position, 1.0), (*light.intensity, shadows.view_index(light) + 1.0)]
             elif isinstance(light, DirectionalLight):
                 d = -np.asarray(light.direction, dtype=np.float64)
-                dirs += [(*(d / np.linalg.norm(d)), 0.0), (*light.irradiance, 0.0)]
+                dirs += [(*(d / np.linalg.norm(d)), 0.0), (*light.irradiance, shadows.view_index(light) + 1.0)]
             elif isinstance(light, QuadLight | PolygonLight):
                 area += self.area_light_rows(light)
         env = []
@@ -184,6 +186,7 @@ class Forward(Technique):
             "N_DIR": len(dirs) // 2,
             "N_AREA": len(area) // 3,
             "N_ENV": len(env) // 2,
+            "SHADOW_VIEWS": shadows.view_count,
             **self.extra_light_flags(polygons),
         }
         self._light_buffers = [self._ssbo(rows) for rows in (points_l, dirs, area, env, polygons)]
@@ -368,8 +371,9 @@ class Forward(Technique):
             ctx.blend_func = moderngl.ONE, moderngl.ONE
         for i, buf in enumerate(self._light_buffers):
             buf.bind_to_storage_buffer(i)
+        self.prepared.shadows.bind()
         eye = tuple(float(c) for c in self.scene.camera.position)
-        per_frame = self.frame_uniforms(frame, seed)
+        per_frame = {**self.frame_uniforms(frame, seed), "u_shadow_atlas": SHADOW_UNIT}
         for program, vao, uniforms, material_textures, own_textures, shading in filter(None, self._draws):
             samplers = {}
             textures = {**material_textures, **own_textures}
@@ -426,8 +430,7 @@ class Forward(Technique):
         for shading in getattr(self, "shadings", []):
             shading.release()
         self.shadings = []
-        for obj in getattr(self, "_objects", []):
-            obj.release()
+        release_objects(self.ctx, getattr(self, "_objects", []))
         self._objects = []
         if getattr(self, "_owns_prepared", False):
             self.prepared.release()

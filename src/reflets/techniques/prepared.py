@@ -3,10 +3,10 @@
 A frame composed by ``auto`` runs several passes over the same scene (the BRDF pass, translucent light views,
 scratch lobes, Fermat reflections). What they all read — the meshes' vertex and index buffers, the quad-light
 masks, the environment map and its texture, the emitters' geometry, the bounding sphere that fixes the clip
-planes — lives here once instead of once per pass; each pass keeps only what is its own (programs, vertex
-arrays binding these buffers to them, light buffers shaped for its method, its tables). A whole-frame method
-makes one for itself; ``auto`` makes one and hands it to every pass (``Technique.shared``). Whoever made it
-releases it.
+planes, the lights' shadow maps — lives here once instead of once per pass; each pass keeps only what is its
+own (programs, vertex arrays binding these buffers to them, light buffers shaped for its method, its tables).
+A whole-frame method makes one for itself; ``auto`` makes one and hands it to every pass (``Technique.shared``).
+Whoever made it releases it.
 """
 
 from __future__ import annotations
@@ -14,12 +14,13 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from ..gpu import ProgramSpec, get_program
+from ..gpu import ProgramSpec, get_program, release_objects
 from ..scene.environment import load_environment
 from ..scene.geometry import bounding_sphere, mesh_data
 from ..scene.lightmask import load_masks, quad_uv
 from ..scene.meshdata import MeshData
 from ..scene.model import PolygonLight, QuadLight, Scene
+from .shadows import ShadowMaps
 
 _SHADERS = "reflets/techniques/shaders/"
 EMITTER_PROGRAM = ProgramSpec(
@@ -53,6 +54,11 @@ class PreparedScene:
         all_points = np.concatenate(points) if points else np.zeros((0, 3))
         #: (centre, radius) of every mesh vertex and emitter corner, (None, 0) for an empty scene: the clip planes
         self.bounds = bounding_sphere(all_points) if len(all_points) else (None, 0.0)
+        #: the point and directional lights' shadow maps (every mesh casts)
+        self.shadows = ShadowMaps(ctx, scene, self._every_mesh, self.bounds)
+
+    def _every_mesh(self, program) -> list:
+        return [self.vertex_array(program, i) for i in range(len(self.meshes))]
 
     def mask_of(self, light) -> np.ndarray | None:
         """The mask of a light of this scene (a pass's scene may hold a subset of the lights: found by identity)."""
@@ -102,8 +108,8 @@ class PreparedScene:
         return obj
 
     def release(self) -> None:
-        for obj in self._objects:
-            obj.release()
+        self.shadows.release()
+        release_objects(self.ctx, self._objects)
         self._objects = []
         self._mesh_buffers = {}
 

@@ -11,7 +11,7 @@ import moderngl
 import numpy as np
 
 from ..errors import ArgumentError
-from ..gpu import ProgramSpec, get_program, set_uniforms
+from ..gpu import ProgramSpec, get_program, release_objects, set_uniforms
 from ..gpu.programs import shared_constants
 from ..scene.geometry import bounding_sphere
 from ..scene.model import DirectionalLight, Scene
@@ -263,8 +263,7 @@ class TranslucentShading(MaterialShading):
         ctx.disable(ctx.DEPTH_TEST)
 
     def release(self) -> None:
-        for obj in self._objects:
-            obj.release()
+        release_objects(self.ctx, self._objects)
         self._objects = []
         self._screen = {}
         self._tables = []

@@ -119,12 +119,16 @@ vec3 scratched_radiance(vec3 x, mat3 frame, vec3 wo, vec2 uv, uvec2 pixel) {
         for (int i = 0; i < N_POINT; ++i) {
             vec3 d = point_data[2 * i].xyz - x;
             float r2 = dot(d, d);
-            sum += thick_light(wo, transpose(frame) * (d * inversesqrt(r2)), point_data[2 * i + 1].rgb / r2, norm, rng);
+            float v = point_visibility(i, x, frame[2]);
+            if (v <= 0.0) continue;
+            sum += thick_light(wo, transpose(frame) * (d * inversesqrt(r2)), point_data[2 * i + 1].rgb * (v / r2), norm, rng);
         }
 #endif
 #if N_DIR > 0
         for (int i = 0; i < N_DIR; ++i) {
-            sum += thick_light(wo, transpose(frame) * dir_data[2 * i].xyz, dir_data[2 * i + 1].rgb, norm, rng);
+            float v = dir_visibility(i, x, frame[2]);
+            if (v <= 0.0) continue;
+            sum += thick_light(wo, transpose(frame) * dir_data[2 * i].xyz, dir_data[2 * i + 1].rgb * v, norm, rng);
         }
 #endif
 #if N_AREA > 0

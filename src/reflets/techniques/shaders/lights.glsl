@@ -5,6 +5,8 @@ layout(std430, binding = 1) readonly buffer DirLights { vec4 dir_data[]; };     
 layout(std430, binding = 2) readonly buffer AreaSamples { vec4 area_data[]; };    // (y, dA), (n_L, two_sided), (L, 0)
 layout(std430, binding = 3) readonly buffer EnvSamples { vec4 env_data[]; };      // direction, L * solid angle
 
+#include "reflets/techniques/shaders/shadows.glsl"
+
 // Light counts N_POINT, N_DIR, N_AREA, N_ENV are compile-time flags, and a light type the scene lacks gets no
 // code at all: on llvmpipe a loop whose trip count is a constant 0 still costs nearly a light's shading
 // (measured: three such loops next to one GGX point light tripled its frame time).
@@ -21,7 +23,9 @@ vec3 direct_lighting(vec3 x, mat3 frame, vec3 wo) {
         vec3 wi = d * inversesqrt(r2);
         float cos_x = dot(n, wi);
         if (cos_x <= 0.0) continue;
-        sum += brdf_eval(wo, to_local * wi) * point_data[2 * i + 1].rgb * (cos_x / r2);
+        float v = point_visibility(i, x, n);
+        if (v <= 0.0) continue;
+        sum += brdf_eval(wo, to_local * wi) * point_data[2 * i + 1].rgb * (v * cos_x / r2);
     }
 #endif
 #if N_DIR > 0
@@ -29,7 +33,9 @@ vec3 direct_lighting(vec3 x, mat3 frame, vec3 wo) {
         vec3 wi = dir_data[2 * i].xyz;
         float cos_x = dot(n, wi);
         if (cos_x <= 0.0) continue;
-        sum += brdf_eval(wo, to_local * wi) * dir_data[2 * i + 1].rgb * cos_x;
+        float v = dir_visibility(i, x, n);
+        if (v <= 0.0) continue;
+        sum += brdf_eval(wo, to_local * wi) * dir_data[2 * i + 1].rgb * (v * cos_x);
     }
 #endif
     // Area lights as weighted midpoint samples (eq 2.8 of the area-light document): f L cosθx cosθy / r² dA.

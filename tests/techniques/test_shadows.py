@@ -1,0 +1,90 @@
+"""Shadow maps of point and directional lights against the reference that traces shadow rays, in every technique.
+
+Scene: a sphere on a floor, the shadowed light plus a dim fill light without shadows (so that shadowed pixels
+are not black and a ratio is defined). Thresholds: the issue's acceptance, on a 160 × 120 image.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import reflets
+from scratches.plates import MATERIAL as SCRATCHED  # tests/scratches
+
+SIZE = (160, 120)
+LIGHTS = {
+    "point": {"type": "point", "position": [1.0, 2.5, 0.5], "intensity": [8, 8, 8]},
+    "grazing point": {"type": "point", "position": [2.2, 0.9, -0.6], "intensity": [8, 8, 8]},
+    "directional": {"type": "directional", "direction": [-0.4, -1, -0.3], "irradiance": [2, 2, 2]},
+}
+FILL = {"type": "directional", "direction": [0.2, -1, 0.4], "irradiance": [0.3, 0.3, 0.3], "shadows": False}
+
+
+def sphere_on_floor(light: dict, shadows: bool = True, floor: dict | None = None, ball: dict | None = None) -> dict:
+    return {
+        "camera": {"position": [0, 2.5, 4], "look_at": [0, 0.3, 0], "fov_y": 40, "size": list(SIZE)},
+        "materials": {
+            "floor": floor or {"type": "lambert", "albedo": [0.7, 0.7, 0.7]},
+            "ball": ball or {"type": "microfacet", "alpha": 0.3, "diffuse": [0.4, 0.3, 0.2]},
+        },
+        "mesh": [
+            {"shape": "plane", "size": [6, 6], "material": "floor"},
+            {"shape": "sphere", "radius": 0.5, "material": "ball", "transform": {"translate": [0, 0.5, 0]}},
+        ],
+        "light": [{**light, "shadows": shadows}, FILL],
+    }
+
+
+def relmse(a, b) -> float:
+    return float(np.mean((a - b) ** 2) / np.mean(b**2))
+
+
+@pytest.mark.parametrize("name", LIGHTS)
+def test_hard_shadows_match_the_reference_with_visibility(name, ctx):
+    """Floor relative MSE ≤ 2 % (no acne on the lit floor, the shadow in place), and inside the hard shadow
+    (where the reference loses over half of its light) the mean within 10 % of the reference's."""
+    scene = reflets.load_dict(sphere_on_floor(LIGHTS[name]))
+    image = reflets.render(scene, method="forward")
+    ref = reflets.reference(scene, spp=4, progress=False).image
+    unshadowed = reflets.render(reflets.load_dict(sphere_on_floor(LIGHTS[name], shadows=False)), method="forward")
+    floor = reflets.render(reflets.load_dict({**sphere_on_floor(LIGHTS[name]), "mesh": [scene.mesh[0]]}))
+    on_floor = np.any(floor != 0, axis=-1) & (np.abs(floor - image).sum(-1) < 1e-6)  # floor pixels not hidden
+    assert relmse(image[on_floor], ref[on_floor]) < 0.02
+    shadow = ref.sum(-1) < 0.5 * unshadowed.sum(-1)
+    assert shadow.sum() > 100  # the scene really has a shadow in view
+    assert abs(image[shadow].mean() / ref[shadow].mean() - 1) < 0.10
+    assert np.all(unshadowed >= image - 1e-5)  # shadows only remove light
+
+
+def test_a_light_without_shadows_is_unshadowed_in_both_renderers(ctx):
+    """``shadows = false``: no shadow map on the GPU, no shadow ray in the reference — the two still agree."""
+    scene = reflets.load_dict(sphere_on_floor(LIGHTS["point"], shadows=False))
+    image = reflets.render(scene, method="forward")
+    ref = reflets.reference(scene, spp=4, progress=False).image
+    assert relmse(image, ref) < 1e-3
+    shadowed = reflets.render(reflets.load_dict(sphere_on_floor(LIGHTS["point"])), method="forward")
+    assert np.sum(np.abs(shadowed - image).sum(-1) > 0.05) > 100
+
+
+@pytest.mark.parametrize(
+    "method, floor",
+    [("ltc", None), ("scratches", "scratched"), ("fermat", None), ("auto", "scratched")],
+)
+def test_every_technique_darkens_the_shadow(method, floor, ctx):
+    """The area-light methods, the scratch lobes and Fermat (direct view and reflections) read the same maps:
+    with a point light, the floor behind the sphere loses its light in each."""
+    ball = {"type": "mirror", "reflectance": [0.9, 0.9, 0.9]} if method in ("fermat", "auto") else None
+    data = sphere_on_floor(LIGHTS["point"], floor={**SCRATCHED, "profile": "quartic:0.5"} if floor else None, ball=ball)
+    if ball is not None:
+        data["mesh"][1]["reflector"] = True
+    on, off = (
+        reflets.render(reflets.load_dict({**data, "light": [{**data["light"][0], "shadows": s}, FILL]}), method=method)
+        for s in (True, False)
+    )
+    darker = (off - on).sum(-1) > 0.1 * off.sum(-1)
+    assert darker.sum() > 100
+    assert np.all(on <= off + 1e-4 + 1e-3 * off)  # nowhere brighter (the scratch lobes: the same random streams)
+    if method == "fermat":  # the floor's shadow seen in the mirror too
+        mirror = reflets.render(reflets.load_dict({**data, "mesh": [data["mesh"][1]]}), method="position")
+        assert np.any(darker & np.any(mirror != 0, axis=-1))
