@@ -32,7 +32,7 @@ def test_quad_light_form_of_the_issue_and_its_emitting_normal(minimal_scene):
     assert isinstance(light, QuadLight)
     poly = light.polygon()
     assert poly.tolist()[2] == [0.5, 1, 0.5]  # c3 = c2 + c4 − c1
-    from reflets.techniques.forward import polygon_normal
+    from reflets.scene.emitters import polygon_normal
 
     assert polygon_normal(poly).tolist() == [0, -1, 0]  # normalize((c2−c1)×(c4−c1)): facing down
 

@@ -10,7 +10,7 @@ Polygon-light record: 16 vec4 per light —
   [0] radiance.rgb, two_sided   [1] c1.xyz, vertex count   [2] e1 = c2 − c1, is_parallelogram
   [3] e2 = c4 − c1, area        [4] emitting normal, width |e1|   [5..12] vertices (counter-clockwise seen
   from the emitting side)       [13] mask: texel offset, width W, height H, 1 (all 0: no mask)
-  [14..15] reserved
+  [14] soft-shadow code (``ShadowMaps.soft_code``; 0: no shadows), 0, 0, 0   [15] reserved
 
 Quad-light masks (``QuadLight.mask``) go to one float SSBO at binding 5 (``MASK_BINDING``), each mask's
 W × H texels row by row from v = 0, compiled in only when the scene has one (flag ``LIGHT_MASKS``). A buffer
@@ -30,8 +30,9 @@ from pydantic import Field
 
 from ..errors import ArgumentError, SceneError
 from ..gpu import ProgramSpec
+from ..scene.emitters import polygon_normal
 from ..scene.model import PolygonLight, QuadLight, Scene
-from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams, polygon_normal
+from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams
 
 SHADERS = "reflets/arealights/shaders/"
 POLY_STRIDE = 16
@@ -53,9 +54,11 @@ class AreaLightParams(ForwardParams):
     output: str = Field("radiance", pattern="^(radiance|position|normal|uv|samples)$")
 
 
-def polygon_record(light: QuadLight | PolygonLight, mask: tuple[int, int, int] | None = None) -> list[tuple]:
+def polygon_record(
+    light: QuadLight | PolygonLight, mask: tuple[int, int, int] | None = None, shadow_code: float = 0.0
+) -> list[tuple]:
     """The 16 rows of one light's record in the polygon buffer (layout in the module docstring); ``mask`` =
-    (texel offset, W, H) in the mask buffer."""
+    (texel offset, W, H) in the mask buffer; ``shadow_code``: its soft-shadow views."""
     poly = light.polygon()
     if len(poly) > MAX_POLY_VERTICES:
         raise ArgumentError(
@@ -75,7 +78,8 @@ def polygon_record(light: QuadLight | PolygonLight, mask: tuple[int, int, int] |
     ]
     rows += [(*p, 0.0) for p in poly] + [(0.0, 0.0, 0.0, 0.0)] * (13 - 5 - len(poly))
     rows.append((*(float(k) for k in mask), 1.0) if mask is not None else (0.0, 0.0, 0.0, 0.0))
-    return rows + [(0.0, 0.0, 0.0, 0.0)] * (POLY_STRIDE - 14)
+    rows.append((float(shadow_code), 0.0, 0.0, 0.0))
+    return rows + [(0.0, 0.0, 0.0, 0.0)] * (POLY_STRIDE - 15)
 
 
 def lobe_info(material) -> dict[str, object]:
@@ -131,7 +135,7 @@ class AreaLightTechnique(Forward):
                 h, w = mask.shape
                 slot, offset = (offset, w, h), offset + w * h
                 texels.append(mask.ravel())
-            rows += polygon_record(light, slot)
+            rows += polygon_record(light, slot, self.prepared.shadows.soft_code(light))
         if offset > MAX_MASK_TEXELS:
             raise SceneError(f"the masks hold {offset} texels in all; at most {MAX_MASK_TEXELS}", field="light.mask")
         self._mask_texels = np.concatenate(texels).astype(np.float32) if texels else None

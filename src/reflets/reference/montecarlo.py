@@ -225,6 +225,11 @@ class MonteCarloReference:
         fcos_b, _ = brdf(wi_b_world)
         valid_b = (pdf_b > 0) & np.any(fcos_b > 0, axis=1)
         hit_b = geo.intersect(origin, wi_b_world, emitters_only=not self.visibility)
+        # lights with shadows = false see the BRDF sample as if nothing but emitters were there
+        unshadowed = [not getattr(sampler.light, "shadows", True) for sampler in self.area]
+        hit_free = (
+            geo.intersect(origin, wi_b_world, emitters_only=True) if self.visibility and any(unshadowed) else hit_b
+        )
 
         for j, sampler in enumerate(self.area):
             # Light sampling.
@@ -236,16 +241,17 @@ class MonteCarloReference:
             p_light = np.where(front, dist * dist / (sampler.area * np.maximum(cos_l, 1e-300)), 0.0)
             fcos, wi_local = brdf(wi)
             p_brdf = self._pdf_brdf(surf.material, wo, wi_local)
-            ok = front & self._unoccluded(origin, wi, dist * (1.0 - 1e-4) - geo.epsilon)  # stop short of the light
+            ok = front & self._unoccluded(origin, wi, dist * (1.0 - 1e-4) - geo.epsilon, sampler.light)  # stop short
             weight = _mis(p_light, p_brdf, self.heuristic)
             contrib = fcos * sampler.radiance_at(y) * (weight / np.where(ok, p_light, 1.0))[:, None]
             result += np.where(ok[:, None], contrib, 0.0)
             # BRDF sampling: rays that reach this light first.
-            on = valid_b & (hit_b.kind == EMITTERS)
-            on[on] = geo.emitter_owner[hit_b.prim[on]] == j
+            hit = hit_free if unshadowed[j] else hit_b
+            on = valid_b & (hit.kind == EMITTERS)
+            on[on] = geo.emitter_owner[hit.prim[on]] == j
             if np.any(on):
                 cos_l_b, front_b = sampler.emitted(wi_b_world[on])
-                dist_b = hit_b.t[on]
+                dist_b = hit.t[on]
                 p_light_b = dist_b * dist_b / (sampler.area * np.maximum(cos_l_b, 1e-300))
                 w_b = _mis(pdf_b[on], p_light_b, self.heuristic)
                 y_b = origin[on] + dist_b[:, None] * wi_b_world[on]

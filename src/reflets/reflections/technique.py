@@ -37,6 +37,7 @@ from pydantic import Field
 
 from ..errors import ArgumentError
 from ..gpu import ProgramSpec, get_program, release_objects, set_uniforms
+from ..scene.emitters import polygon_normal
 from ..scene.geometry import bounding_sphere
 from ..scene.lightmask import quad_uv
 from ..scene.meshdata import MeshData
@@ -44,7 +45,7 @@ from ..scene.model import CylinderMesh, PlaneMesh, PolygonLight, QuadLight, Scen
 from ..scene.surfaces import SampledSurface
 from ..scratches.lobes import LOBE_FLAGS, ScratchLobes
 from ..techniques.base import register_technique
-from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams, polygon_normal
+from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams
 from ..techniques.shading import shading_for
 from ..techniques.shadows import SHADOW_UNIT
 from .scene import canonical_surface

@@ -266,6 +266,7 @@ class QuadLight(Strict):
     radiance: Color
     two_sided: bool = False
     mask: Path | None = None
+    shadows: bool = Field(True, description="casts soft shadows (GPU: shadow maps from points over the emitter)")
 
     @model_validator(mode="after")
     def _non_degenerate(self) -> QuadLight:
@@ -288,6 +289,7 @@ class PolygonLight(Strict):
     vertices: list[Vec3] = Field(min_length=3, max_length=16)
     radiance: Color
     two_sided: bool = False
+    shadows: bool = Field(True, description="casts soft shadows (GPU: shadow maps from points over the emitter)")
 
     @model_validator(mode="after")
     def _planar_convex(self) -> PolygonLight:

@@ -54,8 +54,8 @@ class PreparedScene:
         all_points = np.concatenate(points) if points else np.zeros((0, 3))
         #: (centre, radius) of every mesh vertex and emitter corner, (None, 0) for an empty scene: the clip planes
         self.bounds = bounding_sphere(all_points) if len(all_points) else (None, 0.0)
-        #: the point and directional lights' shadow maps (every mesh casts)
-        self.shadows = ShadowMaps(ctx, scene, self._every_mesh, self.bounds)
+        #: the lights' shadow maps (every mesh casts)
+        self.shadows = ShadowMaps(ctx, scene, self.meshes, self._every_mesh, self.mask_of)
 
     def _every_mesh(self, program) -> list:
         return [self.vertex_array(program, i) for i in range(len(self.meshes))]

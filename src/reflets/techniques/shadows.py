@@ -1,21 +1,34 @@
-"""Shadow maps of the point and directional lights, in one depth atlas shared by every pass of a frame.
+"""Shadow maps of every light but the environment, in one depth atlas shared by every pass of a frame.
 
 Every technique shades its lights through ``shaders/lights.glsl`` (or, for the scratch lobes and Fermat's
-reflected pass, code that includes it), and there ``shaders/shadows.glsl`` multiplies each point / directional
-light by the fraction of filtered shadow-map texels that see it:
+reflected pass, code that includes it), the area-light methods their polygons through ``arealight.frag``, and
+there ``shaders/shadows.glsl`` weights each light by what its shadow views see:
 
 - a point light: six 90° perspective views (a cube map unfolded into the atlas: faces +x, −x, +y, −y, +z, −z,
   picked by the major axis of the light-to-point vector); a directional light: one orthographic view fitted to
-  the scene's bounding sphere. Views are drawn once per prepare (they depend on the lights and the meshes, not
-  on the camera);
-- percentage-closer filtering: 3 × 3 hardware-bilinear comparisons one texel apart;
+  the meshes' bounding sphere; percentage-closer filtering (3 × 3 hardware-bilinear comparisons one texel
+  apart);
+- a quad / polygon light: **soft shadows by the ratio estimator** (Heitz et al. 2018) with shadow maps for
+  visibility: ``SOFT_SIDE``² points spread over the emitter by the midpoint rule (the forward pass's sample
+  pattern), one perspective view from each along the emitting normal, fitted to the meshes' boxes in front
+  of it (two views per point for a two-sided light); the light's unshadowed contribution — exact by LTC or
+  whatever the area-light method computes — is multiplied by Σ_k w_k V_k / Σ_k w_k, with w_k = f cosθ_x cosθ_y
+  dA / r² the unshadowed integrand at point k (a masked quad: × the mask there) and V_k one bilinear
+  comparison in view k. Exact where the light is wholly seen or wholly hidden; in the penumbra a quadrature
+  of the visible fraction with ``SOFT_SIDE``² nodes. Directions more than ``MAX_ANGLE`` from the emitting
+  normal fall outside the views and count as visible (their cosθ_y < 0.18);
+- views are drawn once per prepare (they depend on the lights and the meshes, not on the camera);
 - bias, chosen on the test scenes (``tests/techniques/test_shadows.py``): a slope-scaled polygon offset in the
   depth pass (``SLOPE_BIAS``, ``CONSTANT_BIAS``) and, at lookup, a normal offset of 0.5 + 1.5 sin θ texels
   (θ between the normal and the light) along the normal turned towards the light. No acne on lit surfaces
   (lit floor within 2 % of the reference), and shadows stay attached to their casters.
 
 A light with ``shadows = false`` gets no view. All views share one resolution, chosen so that the atlas stays
-within ``MAX_ATLAS`` texels per side (many lights: smaller maps, a warning-free degradation stated here).
+within ``MAX_ATLAS`` texels per side (many lights: smaller maps).
+
+View record in the storage buffer (``RECORD`` vec4 each): [0..3] view-projection columns, [4] atlas tile (uv of
+its corner, uv size), [5] (world texel size: per unit distance along the axis for a perspective view, 0, 0, 0),
+[6] sample point y and its weight dA × mask, [7] the view's axis (the emitting normal, or its opposite).
 """
 
 from __future__ import annotations
@@ -26,7 +39,9 @@ import moderngl
 import numpy as np
 
 from ..gpu import ProgramSpec, get_program, release_objects, set_uniforms
-from ..scene.model import DirectionalLight, PointLight, Scene
+from ..scene.emitters import area_light_samples, polygon_normal
+from ..scene.lightmask import mask_lookup
+from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
 
 _SHADERS = "reflets/techniques/shaders/"
@@ -40,6 +55,12 @@ RESOLUTION = 2048
 MAX_ATLAS = 4096
 #: glPolygonOffset(factor, units) of the depth pass: depth pushed back by the surface's slope plus a constant
 SLOPE_BIAS, CONSTANT_BIAS = 2.0, 4.0
+#: vec4 rows per view record (layout in the module docstring)
+RECORD = 8
+#: a quad light's soft shadows: SOFT_SIDE² sample views (a polygon: about as many over its fan)
+SOFT_SIDE = 4
+#: soft-shadow views hold directions up to this angle from the emitting normal (degrees)
+MAX_ANGLE = 80.0
 #: the cube faces' (axis, up) pairs, in the order shadows.glsl picks them
 CUBE_FACES = (
     ((1, 0, 0), (0, -1, 0)),
@@ -54,23 +75,36 @@ CUBE_FACES = (
 class ShadowMaps:
     """The shadow views of a scene's lights, drawn into one depth atlas (see the module docstring)."""
 
-    def __init__(self, ctx, scene: Scene, meshes_vertex_array, bounds: tuple):
-        """``meshes_vertex_array(program)``: vertex arrays of every mesh for a program (the prepared scene's);
-        ``bounds``: the scene's bounding sphere (centre, radius)."""
+    def __init__(self, ctx, scene: Scene, meshes, meshes_vertex_array, mask_of):
+        """``meshes``: the scene's ``MeshData`` (world space); ``meshes_vertex_array(program)``: vertex arrays of
+        every mesh for a program (the prepared scene's); ``mask_of(light)``: a quad light's mask or None."""
         self.ctx = ctx
         self.scene = scene
         self._first_view: dict[int, int] = {}  # light index → its first view
-        views: list[tuple[np.ndarray, float]] = []  # (view-projection, world texel size: per unit distance for 90°)
-        centre, radius = bounds
+        self._soft: dict[int, tuple[int, int, int]] = {}  # area light index → (first view, points, views per point)
+        views: list[dict] = []
+        boxes = np.array([[m.positions.min(axis=0), m.positions.max(axis=0)] for m in meshes if len(m.positions)])
+        if len(boxes):
+            corners = np.array([[box[(k >> a) & 1, a] for a in range(3)] for box in boxes for k in range(8)])
+            centre, radius = bounding_sphere_of(corners)
         for index, light in enumerate(scene.light):
-            if not getattr(light, "shadows", False) or centre is None:
+            if not getattr(light, "shadows", False) or not len(boxes):
                 continue
+            first = len(views)
             if isinstance(light, PointLight):
-                self._first_view[index] = len(views)
                 views += _cube_views(np.asarray(light.position, np.float64), centre, radius)
             elif isinstance(light, DirectionalLight):
-                self._first_view[index] = len(views)
                 views.append(_directional_view(np.asarray(light.direction, np.float64), centre, radius))
+            elif isinstance(light, QuadLight | PolygonLight):
+                points, weights = _soft_samples(light, mask_of(light))
+                normal = polygon_normal(light.polygon())
+                axes = (normal, -normal) if light.two_sided else (normal,)
+                for y, w in zip(points, weights, strict=True):
+                    views += [_sample_view(y, axis, w, corners) for axis in axes]
+                self._soft[index] = (first, len(points), len(axes))
+            else:
+                continue
+            self._first_view[index] = first
         self.view_count = len(views)
         self._objects: list = []
         self.atlas = None
@@ -86,20 +120,38 @@ class ShadowMaps:
         self.atlas.filter = (moderngl.LINEAR, moderngl.LINEAR)  # bilinear comparisons (hardware 2×2 PCF)
         self.atlas.repeat_x = self.atlas.repeat_y = False
         records = []
-        for k, (view_proj, texel) in enumerate(views):
+        for k, view in enumerate(views):
             tile = ((k % columns) * self.resolution / size[0], (k // columns) * self.resolution / size[1])
             scale = (self.resolution / size[0], self.resolution / size[1])
             records.append(
                 np.concatenate(
                     [
-                        view_proj.T.ravel(),  # four columns (GLSL mat4 from column vectors)
+                        view["view_proj"].T.ravel(),  # four columns (GLSL mat4 from column vectors)
                         [*tile, *scale],
-                        [texel / self.resolution, 0.0, 0.0, 0.0],
+                        [view["texel"] / self.resolution, 0.0, 0.0, 0.0],
+                        [*view.get("point", (0.0, 0.0, 0.0)), view.get("weight", 0.0)],
+                        [*view.get("axis", (0.0, 0.0, 0.0)), 0.0],
                     ]
                 )
             )
         self.buffer = self._own(ctx.buffer(np.asarray(records, np.float32).tobytes()))
-        self._draw(meshes_vertex_array, views, columns, size)
+        self._draw(meshes_vertex_array, [v["view_proj"] for v in views], columns, size)
+
+    def soft_range(self, light) -> tuple[int, int, int] | None:
+        """(first view, sample points, views per point) of an area light of this scene, or None (no shadows)."""
+        for index, candidate in enumerate(self.scene.light):
+            if candidate is light:
+                return self._soft.get(index)
+        return None
+
+    def soft_code(self, light) -> float:
+        """An area light's views as shadows.glsl's ``soft_visibility`` reads them: (first + 1) × 128 + points × 2
+        + views per point − 1, or 0 (no shadows); exact in float32 (below 2²⁴)."""
+        soft = self.soft_range(light)
+        if soft is None:
+            return 0.0
+        first, points, per_point = soft
+        return float((first + 1) * 128 + points * 2 + per_point - 1)
 
     def view_index(self, light) -> int:
         """The first view of a light of this scene (found by identity: a pass's scene holds some of the lights),
@@ -116,7 +168,7 @@ class ShadowMaps:
             self.atlas.use(SHADOW_UNIT)
             self.buffer.bind_to_storage_buffer(SHADOW_BINDING)
 
-    def _draw(self, meshes_vertex_array, views, columns: int, size: tuple[int, int]) -> None:
+    def _draw(self, meshes_vertex_array, views: list[np.ndarray], columns: int, size: tuple[int, int]) -> None:
         ctx = self.ctx
         program = get_program(ctx, DEPTH_PROGRAM)
         vaos = [self._own(vao) for vao in meshes_vertex_array(program)]
@@ -127,7 +179,7 @@ class ShadowMaps:
         ctx.disable(ctx.CULL_FACE)  # two-sided surfaces cast from both sides
         ctx.polygon_offset = SLOPE_BIAS, CONSTANT_BIAS
         r = self.resolution
-        for k, (view_proj, _) in enumerate(views):
+        for k, view_proj in enumerate(views):
             ctx.viewport = ((k % columns) * r, (k // columns) * r, r, r)
             set_uniforms(program, {"u_view_proj": view_proj.T.astype(np.float32).tobytes()})
             for vao in vaos:
@@ -145,22 +197,77 @@ class ShadowMaps:
         self.atlas = self.buffer = None
 
 
-def _cube_views(position: np.ndarray, centre: np.ndarray, radius: float) -> list[tuple[np.ndarray, float]]:
-    """Six 90° views from a point light holding the scene's bounding sphere (near: as far as the sphere allows)."""
+def bounding_sphere_of(points: np.ndarray) -> tuple[np.ndarray, float]:
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre = 0.5 * (lo + hi)
+    return centre, max(float(np.linalg.norm(hi - lo)) * 0.5, 1e-6)
+
+
+def _cube_views(position: np.ndarray, centre: np.ndarray, radius: float) -> list[dict]:
+    """Six 90° views from a point light holding the meshes' bounding sphere (near: as far as the sphere allows)."""
     dist = float(np.linalg.norm(centre - position))
     far = (dist + radius) * 1.01 + 1e-6
     near = max(far * 1e-4, 0.99 * (dist - radius)) if dist > radius else far * 1e-4
     proj = perspective(90.0, 1.0, near, far)
-    return [(proj @ look_at(position, position + np.asarray(axis), up), 2.0) for axis, up in CUBE_FACES]
+    return [
+        {"view_proj": proj @ look_at(position, position + np.asarray(axis), up), "texel": 2.0}
+        for axis, up in CUBE_FACES
+    ]
 
 
-def _directional_view(direction: np.ndarray, centre: np.ndarray, radius: float) -> tuple[np.ndarray, float]:
-    """An orthographic view along ``direction`` holding the scene's bounding sphere."""
+def _directional_view(direction: np.ndarray, centre: np.ndarray, radius: float) -> dict:
+    """An orthographic view along ``direction`` holding the meshes' bounding sphere."""
     d = direction / np.linalg.norm(direction)
-    radius = max(radius, 1e-6)
     eye = centre - d * 2.0 * radius
     up = (0.0, 1.0, 0.0) if abs(d[1]) < 0.99 else (1.0, 0.0, 0.0)
     near, far = 0.5 * radius, 3.5 * radius
     proj = np.diag([1.0 / radius, 1.0 / radius, -2.0 / (far - near), 1.0])
     proj[2, 3] = -(far + near) / (far - near)
-    return proj @ look_at(eye, centre, up), 2.0 * radius
+    return {"view_proj": proj @ look_at(eye, centre, up), "texel": 2.0 * radius}
+
+
+def _soft_samples(light, mask) -> tuple[np.ndarray, np.ndarray]:
+    """The soft-shadow sample points of an area light and their weights dA × mask (zero-weight points dropped)."""
+    poly = light.polygon()
+    triangles = len(poly) - 2
+    side = SOFT_SIDE if isinstance(light, QuadLight) else max(1, round(SOFT_SIDE / math.sqrt(triangles)))
+    points, areas = area_light_samples(poly, side)
+    if mask is not None:  # a quad: the side × side grid in area_light_samples' order
+        t = (np.arange(side) + 0.5) / side
+        u, v = np.meshgrid(t, t, indexing="xy")
+        areas = areas * mask_lookup(mask, u.ravel(), v.ravel())
+    keep = areas > 0
+    return points[keep], areas[keep]
+
+
+def _sample_view(point: np.ndarray, axis: np.ndarray, weight: float, corners: np.ndarray) -> dict:
+    """A perspective view from ``point`` along ``axis``, its off-axis frustum fitted to the mesh-box corners in
+    front of it (directions clamped at ``MAX_ANGLE`` from the axis)."""
+    up = (0.0, 1.0, 0.0) if abs(axis[1]) < 0.99 else (1.0, 0.0, 0.0)
+    view = look_at(point, point + axis, up)
+    local = corners @ view[:3, :3].T + view[:3, 3]  # view space: the axis is −z
+    depth = -local[:, 2]
+    far = max(float(depth.max()), 1e-6) * 1.01
+    near = max(far * 1e-3, float(depth[depth > 0].min()) * 0.99 if np.any(depth > 0) else far * 1e-3)
+    limit = math.tan(math.radians(MAX_ANGLE))
+    tangents = np.clip(local[:, :2] / np.maximum(depth, far * 1e-6)[:, None], -limit, limit)
+    left, bottom = tangents.min(axis=0)
+    right, top = tangents.max(axis=0)
+    if not np.any(depth > 0) or right - left < 1e-6 or top - bottom < 1e-6:  # nothing in front: any valid view
+        left = bottom = -limit
+        right = top = limit
+    proj = np.array(
+        [
+            [2.0 / (right - left), 0.0, (right + left) / (right - left), 0.0],
+            [0.0, 2.0 / (top - bottom), (top + bottom) / (top - bottom), 0.0],
+            [0.0, 0.0, -(far + near) / (far - near), -2.0 * far * near / (far - near)],
+            [0.0, 0.0, -1.0, 0.0],
+        ]
+    )
+    return {
+        "view_proj": proj @ view,
+        "texel": max(right - left, top - bottom),
+        "point": tuple(point),
+        "weight": float(weight),
+        "axis": tuple(axis),
+    }

@@ -22,7 +22,12 @@ void main() {
     vec3 wo = transpose(frame) * normalize(u_eye - v_position);
     vec3 sum = direct_lighting(v_position, frame, wo);
 #if N_POLYGONS > 0
-    for (int i = 0; i < N_POLYGONS; ++i) sum += area_light_contribution(i, v_position, frame, wo);
+    for (int i = 0; i < N_POLYGONS; ++i) {
+        vec3 light = area_light_contribution(i, v_position, frame, wo);
+        float code = poly_data[i * POLY_STRIDE + 14].x;  // the light's soft shadows: the unshadowed × the ratio
+        if (code > 0.0 && any(greaterThan(light, vec3(0.0)))) light *= soft_visibility(code, v_position, frame, wo);
+        sum += light;
+    }
 #endif
 #if OUTPUT == 4
     f_color = vec4(vec3(float(g_samples)), 1.0);

@@ -2,7 +2,7 @@
 // Light data arrive in std430 buffers filled by reflets/techniques/forward.py (layouts documented there).
 layout(std430, binding = 0) readonly buffer PointLights { vec4 point_data[]; };   // position, intensity
 layout(std430, binding = 1) readonly buffer DirLights { vec4 dir_data[]; };       // to-light dir, irradiance
-layout(std430, binding = 2) readonly buffer AreaSamples { vec4 area_data[]; };    // (y, dA), (n_L, two_sided), (L, 0)
+layout(std430, binding = 2) readonly buffer AreaSamples { vec4 area_data[]; };    // (y, dA), (n_L, two_sided), (L, shadow code)
 layout(std430, binding = 3) readonly buffer EnvSamples { vec4 env_data[]; };      // direction, L * solid angle
 
 #include "reflets/techniques/shaders/shadows.glsl"
@@ -39,7 +39,9 @@ vec3 direct_lighting(vec3 x, mat3 frame, vec3 wo) {
     }
 #endif
     // Area lights as weighted midpoint samples (eq 2.8 of the area-light document): f L cosθx cosθy / r² dA.
+    // Shadows: each light's soft-shadow ratio (shadows.glsl), computed once per run of its samples.
 #if N_AREA > 0
+    float shadow_code = -1.0, shadow = 1.0;
     for (int i = 0; i < N_AREA; ++i) {
         vec4 p = area_data[3 * i];
         vec4 nl = area_data[3 * i + 1];
@@ -50,7 +52,11 @@ vec3 direct_lighting(vec3 x, mat3 frame, vec3 wo) {
         float cos_y = -dot(nl.xyz, wi);
         if (nl.w > 0.5) cos_y = abs(cos_y);
         if (cos_x <= 0.0 || cos_y <= 0.0) continue;
-        sum += brdf_eval(wo, to_local * wi) * area_data[3 * i + 2].rgb * (cos_x * cos_y * p.w / r2);
+        if (area_data[3 * i + 2].w != shadow_code) {
+            shadow_code = area_data[3 * i + 2].w;
+            shadow = soft_visibility(shadow_code, x, frame, wo);
+        }
+        sum += brdf_eval(wo, to_local * wi) * area_data[3 * i + 2].rgb * (shadow * cos_x * cos_y * p.w / r2);
     }
 #endif
 #if N_ENV > 0

@@ -1,29 +1,50 @@
 // Provides point_visibility(i, x, n) and dir_visibility(i, x, n): the fraction of percentage-closer-filtered
-// shadow-map texels that see point light i / directional light i from x (1: lit, 0: in shadow). Maps live in
-// one depth atlas (reflets/techniques/shadows.py): six 90° views per point light, one orthographic view per
-// directional light fitted to the scene; a light without shadows has view index -1 (always 1).
-// SHADOW_VIEWS (compile-time) is the number of views; 0 compiles every test out.
+// shadow-map texels that see point light i / directional light i from x (1: lit, 0: in shadow); and
+// soft_visibility(code, x, frame, wo), an area light's shadowed / unshadowed ratio over its sample views. Maps
+// live in one depth atlas (reflets/techniques/shadows.py: views, records, the ratio estimator); a light without
+// shadows has view index -1 / code 0 (always 1). SHADOW_VIEWS (compile-time) is the number of views; 0 compiles
+// every test out.
 #if SHADOW_VIEWS > 0
-layout(std430, binding = 6) readonly buffer ShadowViews { vec4 shadow_data[]; };  // per view: mat4, tile, params
+const int SHADOW_RECORD = 8;  // vec4 per view: mat4, tile, (texel), (sample point, weight), (axis)
+layout(std430, binding = 6) readonly buffer ShadowViews { vec4 shadow_data[]; };
 uniform sampler2DShadow u_shadow_atlas;
 
-// PCF: 3×3 hardware-bilinear comparisons one texel apart (a 4×4-texel tent), clamped inside the view's tile.
-float shadow_lookup(int view, vec3 x) {
-    int base = 6 * view;
+// x in view `view`'s map: the atlas uv and depth; false outside what the map holds.
+bool shadow_coords(int view, vec3 x, out vec2 uv, out float depth, out vec4 tile) {
+    int base = SHADOW_RECORD * view;
     mat4 m = mat4(shadow_data[base], shadow_data[base + 1], shadow_data[base + 2], shadow_data[base + 3]);
     vec4 clip = m * vec4(x, 1.0);
     vec3 ndc = clip.xyz / clip.w;
-    if (clip.w <= 0.0 || any(greaterThan(abs(ndc), vec3(1.0)))) return 1.0;  // outside what the map holds: lit
-    vec4 tile = shadow_data[base + 4];  // atlas uv of the tile's corner, its size
+    if (clip.w <= 0.0 || any(greaterThan(abs(ndc), vec3(1.0)))) return false;
+    tile = shadow_data[base + 4];  // atlas uv of the tile's corner, its size
+    uv = tile.xy + (ndc.xy * 0.5 + 0.5) * tile.zw;
+    depth = ndc.z * 0.5 + 0.5;
+    return true;
+}
+
+// PCF: 3×3 hardware-bilinear comparisons one texel apart (a 4×4-texel tent), clamped inside the view's tile.
+float shadow_lookup(int view, vec3 x) {
+    vec2 uv;
+    float depth;
+    vec4 tile;
+    if (!shadow_coords(view, x, uv, depth, tile)) return 1.0;  // outside what the map holds: lit
     vec2 texel = 1.0 / vec2(textureSize(u_shadow_atlas, 0));
-    vec2 uv = tile.xy + (ndc.xy * 0.5 + 0.5) * tile.zw;
-    float depth = ndc.z * 0.5 + 0.5;
     vec2 lo = tile.xy + 0.5 * texel, hi = tile.xy + tile.zw - 0.5 * texel;
     float lit = 0.0;
     for (int j = -1; j <= 1; ++j)
         for (int i = -1; i <= 1; ++i)
             lit += texture(u_shadow_atlas, vec3(clamp(uv + vec2(i, j) * texel, lo, hi), depth));
     return lit / 9.0;
+}
+
+// One bilinear comparison (the soft shadows' views: the sum over sample views does the filtering).
+float shadow_tap(int view, vec3 x) {
+    vec2 uv;
+    float depth;
+    vec4 tile;
+    if (!shadow_coords(view, x, uv, depth, tile)) return 1.0;
+    vec2 texel = 1.0 / vec2(textureSize(u_shadow_atlas, 0));
+    return texture(u_shadow_atlas, vec3(clamp(uv, tile.xy + 0.5 * texel, tile.xy + tile.zw - 0.5 * texel), depth));
 }
 
 // x moved off the surface along its normal (turned towards the light) by `texels` shadow texels of world size
@@ -45,7 +66,7 @@ float point_visibility(int i, vec3 x, vec3 n) {
     // the cube face by the major axis, in the order +x, −x, +y, −y, +z, −z (shadows.py)
     int face = a.x >= a.y && a.x >= a.z ? (d.x >= 0.0 ? 0 : 1) : a.y >= a.z ? (d.y >= 0.0 ? 2 : 3) : (d.z >= 0.0 ? 4 : 5);
     float major = max(a.x, max(a.y, a.z));
-    float texel_size = shadow_data[6 * (view + face) + 5].x * major;  // a 90° view: 2 d / resolution
+    float texel_size = shadow_data[SHADOW_RECORD * (view + face) + 5].x * major;  // a 90° view: 2 d / resolution
     vec3 wi = -d / max(length(d), 1e-20);
     vec3 p = normal_offset(x, n, wi, texel_size);
     vec3 dp = p - light;
@@ -57,10 +78,45 @@ float point_visibility(int i, vec3 x, vec3 n) {
 float dir_visibility(int i, vec3 x, vec3 n) {
     int view = int(dir_data[2 * i + 1].w) - 1;
     if (view < 0) return 1.0;
-    float texel_size = shadow_data[6 * view + 5].x;
+    float texel_size = shadow_data[SHADOW_RECORD * view + 5].x;
     return shadow_lookup(view, normal_offset(x, n, dir_data[2 * i].xyz, texel_size));
+}
+// An area light's ratio estimator (Heitz et al. 2018): Σ w_k V_k / Σ w_k over its sample views, w_k = f cosθ_x
+// cosθ_y dA / r² (luminance of f), V_k one comparison in view k. `code` packs (first view + 1) × 128 + points × 2
+// + (views per point − 1), 0 for a light without shadows (shadows.py writes it).
+float soft_visibility(float code, vec3 x, mat3 frame, vec3 wo) {
+    int c = int(code + 0.5);
+    if (c == 0) return 1.0;
+    int first = (c >> 7) - 1, points = (c >> 1) & 63, per_point = (c & 1) + 1;
+    vec3 n = frame[2];
+    mat3 to_local = transpose(frame);
+    float num = 0.0, den = 0.0;
+    for (int k = 0; k < points; ++k) {
+        int view = first + k * per_point;
+        vec4 s = shadow_data[SHADOW_RECORD * view + 6];
+        vec3 axis = shadow_data[SHADOW_RECORD * view + 7].xyz;
+        vec3 d = x - s.xyz;  // from the light's point to x
+        float dist = length(d);
+        if (dist <= 0.0) continue;
+        float along = dot(d, axis);
+        if (per_point == 2 && along < 0.0) {  // a two-sided light: the view on x's side
+            view += 1;
+            along = -along;
+        }
+        vec3 wi = -d / dist;
+        float cos_x = dot(n, wi);
+        if (cos_x <= 0.0 || along <= 0.0) continue;
+        vec3 f = brdf_eval(wo, to_local * wi);
+        float w = (f.r + f.g + f.b) * cos_x * (along / dist) * s.w / (dist * dist);
+        if (!(w > 0.0)) continue;
+        float texel = shadow_data[SHADOW_RECORD * view + 5].x * along;
+        num += w * shadow_tap(view, normal_offset(x, n, wi, texel));
+        den += w;
+    }
+    return den > 0.0 ? num / den : 1.0;
 }
 #else
 float point_visibility(int i, vec3 x, vec3 n) { return 1.0; }
 float dir_visibility(int i, vec3 x, vec3 n) { return 1.0; }
+float soft_visibility(float code, vec3 x, mat3 frame, vec3 wo) { return 1.0; }
 #endif
