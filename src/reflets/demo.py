@@ -45,13 +45,12 @@ class Method:
 @dataclass(frozen=True)
 class DemoEntry:
     """A built-in scene (file in reflets/data/scenes), the methods shown for it, and whether the gallery also
-    shows the NumPy Monte Carlo reference next to them (with error metrics; unoccluded when ``visibility`` is
-    False, as the area-light methods assume)."""
+    shows the NumPy Monte Carlo reference next to them (with error metrics; shadows traced, as the GPU maps
+    them)."""
 
     scene: str
     methods: tuple[Method, ...] = (Method("forward"),)
     reference: bool = False
-    visibility: bool = True
     reference_spp: int = REFERENCE_SPP  # 1 where every light is a delta light (the reference is then exact)
 
 
@@ -67,7 +66,7 @@ AREA_METHODS = (
 
 #: later techniques add their scenes here
 DEMO: list[DemoEntry] = [
-    DemoEntry("60_showcase.toml", (Method("auto", spp=32),), reference=True, visibility=False),
+    DemoEntry("60_showcase.toml", (Method("auto", spp=32),), reference=True),
     DemoEntry("01_plane_point.toml"),
     DemoEntry("02_sphere_directional.toml"),
     DemoEntry("03_shapes.toml"),
@@ -77,8 +76,8 @@ DEMO: list[DemoEntry] = [
     DemoEntry("10_ref_plane_quad.toml", reference=True),
     DemoEntry("11_ref_ggx_sphere_quad.toml", reference=True),
     DemoEntry("12_ref_sphere_env.toml", reference=True),
-    DemoEntry("20_arealight_phong.toml", AREA_METHODS, reference=True, visibility=False),
-    DemoEntry("21_arealight_ggx.toml", AREA_METHODS, reference=True, visibility=False),
+    DemoEntry("20_arealight_phong.toml", AREA_METHODS, reference=True),
+    DemoEntry("21_arealight_ggx.toml", AREA_METHODS, reference=True),
     DemoEntry(
         "30_translucent_slab.toml",
         (Method("translucent"), Method("translucent", (("ms_quadrature", "bilinear"),)), Method("forward")),
@@ -90,13 +89,10 @@ DEMO: list[DemoEntry] = [
         "40_reflect_teapot_sphere.toml",
         (Method("fermat"), Method("fermat", (("subdivide", 1),)), Method("fermat", (("solver", "document"),))),
         reference=True,
-        visibility=False,
         reference_spp=1,
     ),
-    DemoEntry("42_reflect_bezier.toml", (Method("fermat"),), reference=True, visibility=False, reference_spp=1),
-    DemoEntry(
-        "41_reflect_room.toml", (Method("fermat"), Method("forward")), reference=True, visibility=False, reference_spp=8
-    ),
+    DemoEntry("42_reflect_bezier.toml", (Method("fermat"),), reference=True, reference_spp=1),
+    DemoEntry("41_reflect_room.toml", (Method("fermat"), Method("forward")), reference=True, reference_spp=8),
     DemoEntry("50_brushed_plate.toml", (Method("scratches", spp=128), Method("forward"))),
     DemoEntry("51_scratched_plate.toml", (Method("scratches", spp=64), Method("forward"))),
     DemoEntry("52_scratched_teapot.toml", (Method("scratches", spp=64), Method("forward"))),
@@ -209,7 +205,7 @@ def _reference_image(entry: DemoEntry, size, out_dir: Path):
     from .reference import reference
 
     scene = load_scene(scene_path(entry.scene))
-    ref = reference(scene, spp=entry.reference_spp, size=size, visibility=entry.visibility, progress=False)
+    ref = reference(scene, spp=entry.reference_spp, size=size, progress=False)
     stem = f"{Path(entry.scene).stem}.reference"
     write_image(out_dir / f"{stem}.exr", ref.image)
     write_image(out_dir / f"{stem}.stderr.exr", ref.stderr)

@@ -130,3 +130,18 @@ def test_an_area_light_without_shadows_is_unshadowed_in_both_renderers(ctx):
     image = reflets.render(scene, method="ltc")
     ref = reflets.reference(scene, spp=64, progress=False).image
     assert relmse(image, ref) < 2e-3
+
+
+def test_pcss_the_compared_design_shadows_too_but_less_accurately(ctx):
+    """``soft_shadows = "pcss"`` (one view at the emitter's centre) darkens the same shadow, further from the
+    reference than the ratio estimator (benchmarks/results/shadows.md measures both)."""
+    scene = reflets.load_dict(sphere_on_floor(AREA_LIGHTS["quad"]))
+    ref = reflets.reference(scene, spp=64, progress=False).image
+    ratio = reflets.render(scene, method="ltc")
+    pcss = reflets.render(scene, method="auto", soft_shadows="pcss")
+    unshadowed = reflets.render(reflets.load_dict(sphere_on_floor(AREA_LIGHTS["quad"], shadows=False)), method="ltc")
+    floor = reflets.render(reflets.load_dict({**sphere_on_floor(AREA_LIGHTS["quad"]), "mesh": [scene.mesh[0]]}))
+    on_floor = np.any(floor != 0, axis=-1) & (np.abs(floor - unshadowed).sum(-1) < 1e-6)
+    error = {name: relmse(img[on_floor], ref[on_floor]) for name, img in (("ratio", ratio), ("pcss", pcss))}
+    assert error["pcss"] < 0.25 * relmse(unshadowed[on_floor], ref[on_floor])
+    assert error["ratio"] < error["pcss"]

@@ -3,8 +3,10 @@
 Each method is a technique built on the forward pass (``Forward``): point, directional and environment lights
 are shaded as there, and every quad / polygon light is handed to the method's GLSL function
 ``vec3 area_light_contribution(int i, vec3 x, mat3 frame, vec3 wo)`` (slot ``AREA``), with the light records
-below in the std430 buffer at binding 4. As in the area-light document, **no method computes shadows from
-other objects** (the unoccluded assumption); compare them with ``reflets.reference(..., visibility=False)``.
+below in the std430 buffer at binding 4. Each method computes the light's **unoccluded** integral (the
+area-light document's setting); shadows are then applied by the soft-shadow ratio of ``arealight.frag``
+(docs/techniques/shadows.md). ``shadows = false`` on the lights gives the document's unoccluded setting, to
+compare with ``reflets.reference(..., visibility=False)``.
 
 Polygon-light record: 16 vec4 per light —
   [0] radiance.rgb, two_sided   [1] c1.xyz, vertex count   [2] e1 = c2 − c1, is_parallelogram

@@ -11,8 +11,9 @@ For every polygon light and shaded point x on its emitting side (V1), the unoccl
   vertices costs (m − 2) n² samples.
 
 Per sample: one-sided lights contribute only where cosθy > 0, two-sided ones with |cosθy|; samples below
-the horizon of x (cosθx ≤ 0, the document's V2) contribute nothing. No shadows from other objects (the
-document's setting; compare with ``reflets.reference(scene, visibility=False)``). ``output="samples"``
+the horizon of x (cosθx ≤ 0, the document's V2) contribute nothing. The unoccluded integral (the document's
+setting; shadows: the soft-shadow ratio; compare unoccluded scenes with ``reflets.reference(scene,
+visibility=False)``). ``output="samples"``
 counts every grid point of every light whose V1 test passed (n² per parallelogram light).
 
 Accuracy: the error decays as O(1/n²) for smooth integrands (``tests/arealights/test_brute.py``: on a

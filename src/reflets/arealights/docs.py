@@ -23,9 +23,12 @@ reflets fit-ltc --brdf ggx -o ggx.npz
 reflets bench arealights          # benchmarks/results/arealights.{json,md,png}
 ```
 
-**Unoccluded.** As in the document, no method computes shadows cast by other objects: a light contributes
-wherever its emitting side faces the shaded point, clipped to the point's horizon. Compare them with the
-unoccluded reference, `reflets.reference(scene, visibility=False)` / `reflets reference --visibility off`.
+**Unoccluded, then shadowed.** As in the document, each method computes a light's unoccluded integral: a light
+contributes wherever its emitting side faces the shaded point, clipped to the point's horizon. Shadows cast by
+other objects multiply it by the soft-shadow ratio (docs/techniques/shadows.md), on by default. The accuracy
+figures on this page are measured on unoccluded scenes (a plane under the light) against the unoccluded
+reference, `reflets.reference(scene, visibility=False)` / `reflets reference --visibility off`; set
+`shadows = false` on a light to get the document's setting in any scene.
 Point, directional and environment lights in the same scene are shaded as by `forward`.
 
 ## Errata of the document, fixed here

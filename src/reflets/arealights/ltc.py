@@ -24,8 +24,9 @@ Lambertian and stay in the fitted lobe (one LTC for the whole BRDF). A coloured 
 measured) shares one shape (fitted to its luminance) with a magnitude per RGB channel.
 
 One- and two-sided lights: a one-sided light seen from behind contributes nothing; the absolute value of the
-edge sum makes a two-sided light right from either side. No shadows from other objects (as every area-light
-method); compare with ``reflets.reference(..., visibility=False)``.
+edge sum makes a two-sided light right from either side. The unoccluded integral (as every area-light method;
+shadows: the soft-shadow ratio, docs/techniques/shadows.md); compare unoccluded scenes with
+``reflets.reference(..., visibility=False)``.
 
 Accuracy (benchmark scene of tests/arealights/test_ltc.py, relative MSE against the unoccluded reference;
 more in data/ltc/README.md): GGX α = 0.1 / 0.3 / 0.6: 0.02 / 0.11 / 0.04 %; normalised Phong e = 150: 0.9 %;

@@ -1,7 +1,7 @@
 """``mc``: Monte Carlo integration of each polygon light (area-light document §2.6–2.7) and its MIS successor.
 
 Per pixel, light and frame, ``samples`` = N samples estimate L_o = L ∫_A f_r(wo, wi) cosθx cosθy / r² dA
-(unoccluded, like every area-light method). Strategies (``strategy``):
+(unoccluded, like every area-light method; shadows: the soft-shadow ratio). Strategies (``strategy``):
 
 ``uniform``
     N points uniform in area (a parallelogram: uniform (u, v); any convex polygon: a fan triangle chosen

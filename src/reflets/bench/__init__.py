@@ -23,6 +23,7 @@ SUITES: dict[str, str] = {
     "reflections": "reflets.bench.reflections:bench_reflections",
     "scratches": "reflets.bench.scratches:bench_scratches",
     "renderer": "reflets.bench.renderer:bench_renderer",
+    "shadows": "reflets.bench.shadows:bench_shadows",
 }
 
 

@@ -23,7 +23,7 @@ Passes per frame (the document's §3.2, with its silhouette problem fixed):
 Reflectors: ``reflector = true`` meshes with a ``mirror`` material, of shape sphere (with any transform: an
 ellipsoid), torus, open cylinder (``caps = false``) or plane, solved on their exact parametric surface.
 Limits (as in the document): one reflection per vertex (a vertex with several reflection points shows one),
-reflectors do not appear in reflections, no shadows (like every reflets method unless it says so).
+reflectors do not appear in reflections. Shadows: the forward pass's shadow maps light the reflected objects too.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ from ..scratches.lobes import LOBE_FLAGS, ScratchLobes
 from ..techniques.base import register_technique
 from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams
 from ..techniques.shading import shading_for
-from ..techniques.shadows import SHADOW_UNIT
+from ..techniques.shadows import SHADOW_SAMPLERS
 from .scene import canonical_surface
 from .solver import SOLVERS, SURFACE_KINDS, glsl_constants
 
@@ -388,7 +388,7 @@ class Fermat(Forward):
                 "u_gbuffer_normal": GBUFFER_UNITS[1],
                 "u_reflector_id": reflector_id,
                 "u_hidden_tolerance": self.params.hidden_tolerance * size,
-                "u_shadow_atlas": SHADOW_UNIT,  # bound by the forward pass
+                **SHADOW_SAMPLERS,  # bound by the forward pass
                 **ScratchLobes.frame_uniforms(frame, seed),  # reflected scratched meshes sample per frame
             }
             for program, vao, uniforms, textures in draws:

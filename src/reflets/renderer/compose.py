@@ -41,7 +41,14 @@ from pydantic import Field
 from ..gpu import FrameTimer
 from ..scene.model import PolygonLight, QuadLight, Scene
 from ..techniques.base import Technique, TechniqueParams, get_technique, register_technique
-from ..techniques.forward import Forward, GridSide, PassRole, check_target_size, samples_per_pixel_side
+from ..techniques.forward import (
+    Forward,
+    GridSide,
+    PassRole,
+    check_target_size,
+    samples_per_pixel_side,
+    shadow_settings,
+)
 from ..techniques.prepared import PreparedScene
 
 #: the method of a scene that names none
@@ -60,6 +67,10 @@ class AutoParams(TechniqueParams):
         8, ge=1, le=64, description="n: n×n midpoint samples per quad light where passes use them"
     )
     env_grid: tuple[GridSide, GridSide] = Field((32, 16), description="environment map as nu × nv distant lights")
+    soft_shadows: Literal["ratio", "pcss"] = Field(
+        "ratio", description="area lights' soft shadows: the ratio estimator over sample views, or PCSS"
+    )
+    shadow_samples: int = Field(4, ge=1, le=8, description="ratio: n×n shadow views per quad light")
 
 
 def pass_plan(scene: Scene, area_method: str) -> list[tuple[str, Scene, frozenset[int], bool]]:
@@ -164,7 +175,7 @@ class Auto(Technique):
         self.passes: list[tuple[str, Technique]] = []
         # meshes, masks, environment and emitters uploaded once for every pass (each pass's scene holds the same
         # meshes and materials, lit by some of the lights)
-        self.prepared = PreparedScene(self.ctx, scene)
+        self.prepared = PreparedScene(self.ctx, scene, shadow_settings(p))
         for k, (method, pass_scene, meshes, additive) in enumerate(plan):
             technique = get_technique(method)(self.ctx, area_samples=p.area_samples, env_grid=p.env_grid)
             technique.role = PassRole(meshes=meshes, clear=k == 0, extras=k == len(plan) - 1, additive=additive)

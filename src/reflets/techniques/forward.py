@@ -2,10 +2,9 @@
 
 What it computes, exactly or not:
 
-- point and directional lights: exact direct lighting (no shadows — no technique in reflets shadows
-  other objects unless it says so);
+- point and directional lights: exact direct lighting, shadowed by shadow maps with PCF (``shadows.py``);
 - quad and polygon area lights: the midpoint rule of the area-light document (eq 2.8) with ``area_samples``²
-  points per quad (per triangle of a polygon fan); converges as O(1/n²); the dedicated area-light methods
+  points per quad (per triangle of a polygon fan), shadowed by the light's soft-shadow ratio; converges as O(1/n²); the dedicated area-light methods
   (adaptive, cone, LTC, exact diffuse) come with ``reflets.arealights``;
 - environment maps: ``env_grid`` distant lights whose powers integrate the map exactly (diffuse-accurate,
   blurry for sharp lobes);
@@ -39,7 +38,7 @@ from ..scene.transform import look_at, perspective
 from .base import Technique, TechniqueParams, register_technique
 from .prepared import PreparedScene
 from .shading import MaterialShading, shading_for
-from .shadows import SHADOW_UNIT
+from .shadows import SHADOW_SAMPLERS, ShadowSettings
 
 _SHADERS = "reflets/techniques/shaders/"
 #: compile-time light counts of lights.glsl (every program that includes it declares them)
@@ -62,8 +61,17 @@ class ForwardParams(TechniqueParams):
     """Parameters of the forward renderer."""
 
     area_samples: int = Field(8, ge=1, le=64, description="n: n×n midpoint samples per quad light")
+    soft_shadows: Literal["ratio", "pcss"] = Field(
+        "ratio", description="area lights' soft shadows: the ratio estimator over sample views, or PCSS"
+    )
+    shadow_samples: int = Field(4, ge=1, le=8, description="ratio: n×n shadow views per quad light")
     env_grid: tuple[GridSide, GridSide] = Field((32, 16), description="environment map as nu × nv distant lights")
     output: Literal["radiance", "position", "normal", "uv"] = "radiance"
+
+
+def shadow_settings(params) -> ShadowSettings:
+    """The soft-shadow settings of a technique's (or ``auto``'s) parameters."""
+    return ShadowSettings(params.soft_shadows, params.shadow_samples)
 
 
 def check_target_size(ctx, width: int, height: int, s: int) -> None:
@@ -124,7 +132,9 @@ class Forward(Technique):
         self.release()
         self.scene = scene
         self._objects = []
-        self.prepared = self.shared if self.shared is not None else PreparedScene(ctx, scene)
+        self.prepared = (
+            self.shared if self.shared is not None else PreparedScene(ctx, scene, shadow_settings(self.params))
+        )
         self._owns_prepared = self.shared is None
 
         points_l, dirs, area = [], [], []
@@ -340,7 +350,7 @@ class Forward(Technique):
             buf.bind_to_storage_buffer(i)
         self.prepared.shadows.bind()
         eye = tuple(float(c) for c in self.scene.camera.position)
-        per_frame = {**self.frame_uniforms(frame, seed), "u_shadow_atlas": SHADOW_UNIT}
+        per_frame = {**self.frame_uniforms(frame, seed), **SHADOW_SAMPLERS}
         for program, vao, uniforms, material_textures, own_textures, shading in filter(None, self._draws):
             samplers = {}
             textures = {**material_textures, **own_textures}

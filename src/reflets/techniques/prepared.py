@@ -20,7 +20,7 @@ from ..scene.geometry import bounding_sphere, mesh_data
 from ..scene.lightmask import load_masks, quad_uv
 from ..scene.meshdata import MeshData
 from ..scene.model import PolygonLight, QuadLight, Scene
-from .shadows import ShadowMaps
+from .shadows import DEFAULT_SHADOWS, ShadowMaps, ShadowSettings
 
 _SHADERS = "reflets/techniques/shaders/"
 EMITTER_PROGRAM = ProgramSpec(
@@ -33,7 +33,7 @@ MESH_LAYOUT = ("3f 3f 4f 2f", "in_position", "in_normal", "in_tangent", "in_uv")
 class PreparedScene:
     """Meshes, masks, environment and emitters of one scene on one context (see the module docstring)."""
 
-    def __init__(self, ctx, scene: Scene):
+    def __init__(self, ctx, scene: Scene, shadow_settings: ShadowSettings = DEFAULT_SHADOWS):
         self.ctx = ctx
         self.scene = scene
         self._objects: list = []
@@ -55,7 +55,7 @@ class PreparedScene:
         #: (centre, radius) of every mesh vertex and emitter corner, (None, 0) for an empty scene: the clip planes
         self.bounds = bounding_sphere(all_points) if len(all_points) else (None, 0.0)
         #: the lights' shadow maps (every mesh casts)
-        self.shadows = ShadowMaps(ctx, scene, self.meshes, self._every_mesh, self.mask_of)
+        self.shadows = ShadowMaps(ctx, scene, self.meshes, self._every_mesh, self.mask_of, shadow_settings)
 
     def _every_mesh(self, program) -> list:
         return [self.vertex_array(program, i) for i in range(len(self.meshes))]

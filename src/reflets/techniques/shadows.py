@@ -27,13 +27,16 @@ A light with ``shadows = false`` gets no view. All views share one resolution, c
 within ``MAX_ATLAS`` texels per side (many lights: smaller maps).
 
 View record in the storage buffer (``RECORD`` vec4 each): [0..3] view-projection columns, [4] atlas tile (uv of
-its corner, uv size), [5] (world texel size: per unit distance along the axis for a perspective view, 0, 0, 0),
+its corner, uv size), [5] (world texel size: per unit distance along the axis for a perspective view; near and
+far of a soft-shadow view, 0),
 [6] sample point y and its weight dA × mask, [7] the view's axis (the emitting normal, or its opposite).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Literal
 
 import moderngl
 import numpy as np
@@ -46,8 +49,10 @@ from ..scene.transform import look_at, perspective
 
 _SHADERS = "reflets/techniques/shaders/"
 DEPTH_PROGRAM = ProgramSpec("shadow_depth", vertex=_SHADERS + "mesh.vert", fragment=_SHADERS + "shadow_depth.frag")
-#: texture unit of the atlas and storage binding of the views in every shading program
-SHADOW_UNIT = 11
+#: texture units of the atlas (depth comparisons; raw depths for PCSS) and storage binding of the views in every
+#: shading program
+SHADOW_UNIT, SHADOW_DEPTH_UNIT = 11, 10
+SHADOW_SAMPLERS = {"u_shadow_atlas": SHADOW_UNIT, "u_shadow_depth": SHADOW_DEPTH_UNIT}
 SHADOW_BINDING = 6
 #: pixels per side of one view (a point light's cube face, a directional light's map)
 RESOLUTION = 2048
@@ -57,8 +62,21 @@ MAX_ATLAS = 4096
 SLOPE_BIAS, CONSTANT_BIAS = 2.0, 4.0
 #: vec4 rows per view record (layout in the module docstring)
 RECORD = 8
-#: a quad light's soft shadows: SOFT_SIDE² sample views (a polygon: about as many over its fan)
+#: a quad light's soft shadows: SOFT_SIDE² sample views by default (a polygon: about as many over its fan)
 SOFT_SIDE = 4
+#: soft-shadow designs: the ratio estimator over sample views, or PCSS from one view at the emitter's centre
+SOFT_DESIGNS = ("ratio", "pcss")
+
+
+@dataclass(frozen=True)
+class ShadowSettings:
+    """How area lights' soft shadows are made (the techniques' ``soft_shadows`` and ``shadow_samples``)."""
+
+    design: Literal["ratio", "pcss"] = "ratio"
+    side: int = SOFT_SIDE  # ratio: side² sample views per quad light
+
+
+DEFAULT_SHADOWS = ShadowSettings()
 #: soft-shadow views hold directions up to this angle from the emitting normal (degrees)
 MAX_ANGLE = 80.0
 #: the cube faces' (axis, up) pairs, in the order shadows.glsl picks them
@@ -75,11 +93,12 @@ CUBE_FACES = (
 class ShadowMaps:
     """The shadow views of a scene's lights, drawn into one depth atlas (see the module docstring)."""
 
-    def __init__(self, ctx, scene: Scene, meshes, meshes_vertex_array, mask_of):
+    def __init__(self, ctx, scene: Scene, meshes, meshes_vertex_array, mask_of, settings=DEFAULT_SHADOWS):
         """``meshes``: the scene's ``MeshData`` (world space); ``meshes_vertex_array(program)``: vertex arrays of
         every mesh for a program (the prepared scene's); ``mask_of(light)``: a quad light's mask or None."""
         self.ctx = ctx
         self.scene = scene
+        self.settings = settings
         self._first_view: dict[int, int] = {}  # light index → its first view
         self._soft: dict[int, tuple[int, int, int]] = {}  # area light index → (first view, points, views per point)
         views: list[dict] = []
@@ -96,7 +115,7 @@ class ShadowMaps:
             elif isinstance(light, DirectionalLight):
                 views.append(_directional_view(np.asarray(light.direction, np.float64), centre, radius))
             elif isinstance(light, QuadLight | PolygonLight):
-                points, weights = _soft_samples(light, mask_of(light))
+                points, weights = _soft_samples(light, mask_of(light), settings)
                 normal = polygon_normal(light.polygon())
                 axes = (normal, -normal) if light.two_sided else (normal,)
                 for y, w in zip(points, weights, strict=True):
@@ -119,6 +138,8 @@ class ShadowMaps:
         self.atlas.compare_func = "<="  # sampler2DShadow: 1 where the point is not behind the stored depth
         self.atlas.filter = (moderngl.LINEAR, moderngl.LINEAR)  # bilinear comparisons (hardware 2×2 PCF)
         self.atlas.repeat_x = self.atlas.repeat_y = False
+        self._raw = self._own(ctx.sampler(filter=(moderngl.NEAREST, moderngl.NEAREST), compare_func=""))
+        self._raw.repeat_x = self._raw.repeat_y = False
         records = []
         for k, view in enumerate(views):
             tile = ((k % columns) * self.resolution / size[0], (k // columns) * self.resolution / size[1])
@@ -128,7 +149,7 @@ class ShadowMaps:
                     [
                         view["view_proj"].T.ravel(),  # four columns (GLSL mat4 from column vectors)
                         [*tile, *scale],
-                        [view["texel"] / self.resolution, 0.0, 0.0, 0.0],
+                        [view["texel"] / self.resolution, *view.get("near_far", (0.0, 0.0)), 0.0],
                         [*view.get("point", (0.0, 0.0, 0.0)), view.get("weight", 0.0)],
                         [*view.get("axis", (0.0, 0.0, 0.0)), 0.0],
                     ]
@@ -145,13 +166,14 @@ class ShadowMaps:
         return None
 
     def soft_code(self, light) -> float:
-        """An area light's views as shadows.glsl's ``soft_visibility`` reads them: (first + 1) × 128 + points × 2
-        + views per point − 1, or 0 (no shadows); exact in float32 (below 2²⁴)."""
+        """An area light's views as shadows.glsl's ``soft_visibility`` reads them: (first + 1) × 256 + points × 4
+        + PCSS × 2 + views per point − 1, or 0 (no shadows); exact in float32 (below 2²⁴)."""
         soft = self.soft_range(light)
         if soft is None:
             return 0.0
         first, points, per_point = soft
-        return float((first + 1) * 128 + points * 2 + per_point - 1)
+        pcss = int(self.settings.design == "pcss")
+        return float((first + 1) * 256 + points * 4 + pcss * 2 + per_point - 1)
 
     def view_index(self, light) -> int:
         """The first view of a light of this scene (found by identity: a pass's scene holds some of the lights),
@@ -166,6 +188,8 @@ class ShadowMaps:
         ignores both)."""
         if self.atlas is not None:
             self.atlas.use(SHADOW_UNIT)
+            self.atlas.use(SHADOW_DEPTH_UNIT)
+            self._raw.use(SHADOW_DEPTH_UNIT)  # that unit reads raw depths (no comparison)
             self.buffer.bind_to_storage_buffer(SHADOW_BINDING)
 
     def _draw(self, meshes_vertex_array, views: list[np.ndarray], columns: int, size: tuple[int, int]) -> None:
@@ -226,11 +250,15 @@ def _directional_view(direction: np.ndarray, centre: np.ndarray, radius: float) 
     return {"view_proj": proj @ look_at(eye, centre, up), "texel": 2.0 * radius}
 
 
-def _soft_samples(light, mask) -> tuple[np.ndarray, np.ndarray]:
-    """The soft-shadow sample points of an area light and their weights dA × mask (zero-weight points dropped)."""
+def _soft_samples(light, mask, settings: ShadowSettings) -> tuple[np.ndarray, np.ndarray]:
+    """The soft-shadow sample points of an area light and their weights dA × mask (zero-weight points dropped);
+    PCSS: the emitter's centroid, weighted by its area."""
     poly = light.polygon()
+    if settings.design == "pcss":
+        points, areas = area_light_samples(poly, 1)
+        return (areas @ points / areas.sum())[None], np.array([areas.sum()])
     triangles = len(poly) - 2
-    side = SOFT_SIDE if isinstance(light, QuadLight) else max(1, round(SOFT_SIDE / math.sqrt(triangles)))
+    side = settings.side if isinstance(light, QuadLight) else max(1, round(settings.side / math.sqrt(triangles)))
     points, areas = area_light_samples(poly, side)
     if mask is not None:  # a quad: the side × side grid in area_light_samples' order
         t = (np.arange(side) + 0.5) / side
@@ -267,6 +295,7 @@ def _sample_view(point: np.ndarray, axis: np.ndarray, weight: float, corners: np
     return {
         "view_proj": proj @ view,
         "texel": max(right - left, top - bottom),
+        "near_far": (near, far),
         "point": tuple(point),
         "weight": float(weight),
         "axis": tuple(axis),

@@ -8,6 +8,7 @@
 const int SHADOW_RECORD = 8;  // vec4 per view: mat4, tile, (texel), (sample point, weight), (axis)
 layout(std430, binding = 6) readonly buffer ShadowViews { vec4 shadow_data[]; };
 uniform sampler2DShadow u_shadow_atlas;
+uniform sampler2D u_shadow_depth;  // the same atlas, raw depths (PCSS's blocker search)
 
 // x in view `view`'s map: the atlas uv and depth; false outside what the map holds.
 bool shadow_coords(int view, vec3 x, out vec2 uv, out float depth, out vec4 tile) {
@@ -81,13 +82,77 @@ float dir_visibility(int i, vec3 x, vec3 n) {
     float texel_size = shadow_data[SHADOW_RECORD * view + 5].x;
     return shadow_lookup(view, normal_offset(x, n, dir_data[2 * i].xyz, texel_size));
 }
+float linear_depth(float d, float near, float far) {
+    float z = 2.0 * d - 1.0;
+    return 2.0 * near * far / (far + near - z * (far - near));
+}
+
+// PCSS (Fernando 2005) from one view at the emitter's centre: the mean depth of the blockers found in the
+// region the light's extent could hide x from, the penumbra width it implies (similar triangles: w_light
+// (z_r − z_b) / z_b), and percentage-closer filtering over that width; 4 × 4 taps each.
+float pcss_visibility(int view, vec3 x, vec3 n) {
+    int base = SHADOW_RECORD * view;
+    vec4 s = shadow_data[base + 6];
+    vec3 axis = shadow_data[base + 7].xyz;
+    vec4 lens = shadow_data[base + 5];  // texel size per unit depth, near, far
+    vec3 d = x - s.xyz;
+    float along = dot(d, axis);
+    if (along <= 0.0) return 1.0;
+    vec3 wi = -normalize(d);
+    vec2 uv;
+    float depth;
+    vec4 tile;
+    if (!shadow_coords(view, normal_offset(x, n, wi, lens.x * along), uv, depth, tile)) return 1.0;
+    vec2 size = vec2(textureSize(u_shadow_atlas, 0));
+    vec2 texel = 1.0 / size;
+    vec2 lo = tile.xy + 0.5 * texel, hi = tile.xy + tile.zw - 0.5 * texel;
+    float near = lens.y, far = lens.z;
+    float z_r = linear_depth(depth, near, far);
+    float width = lens.x * tile.z * size.x;  // tangent extent of the view (its uv per world unit at depth z: 1 / (z width))
+    float light = sqrt(s.w);
+    float search = min(light * (z_r - near) / (z_r * near * width), 0.125) * tile.z;  // atlas uv
+    // receiver-plane bias: a blocker must be nearer than x's own tangent plane gets across the search region
+    // (its world radius × tan of the surface's tilt to the light, tilt capped at 78°); without it a curved lit
+    // surface finds itself as a blocker and darkens
+    float cos_n = abs(dot(n, wi));
+    float tilt = sqrt(max(0.0, 1.0 - cos_n * cos_n)) / max(cos_n, 0.2);
+    float bias = max(2.0 * lens.x * z_r, search / tile.z * z_r * width * tilt);
+    float blockers = 0.0, sum_z = 0.0;
+    for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i) {
+            vec2 o = (vec2(i, j) + 0.5) * 0.5 - 1.0;
+            float z_b = linear_depth(texture(u_shadow_depth, clamp(uv + o * search, lo, hi)).r, near, far);
+            if (z_b < z_r - bias) {
+                blockers += 1.0;
+                sum_z += z_b;
+            }
+        }
+    if (blockers == 0.0) return 1.0;
+    float z_b = sum_z / blockers;
+    float radius = clamp(0.5 * light * (z_r - z_b) / (z_b * z_r * width) * tile.z, texel.x, 0.125 * tile.z);
+    float lit = 0.0;
+    for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i) {
+            vec2 o = (vec2(i, j) + 0.5) * 0.5 - 1.0;
+            lit += texture(u_shadow_atlas, vec3(clamp(uv + o * radius, lo, hi), depth));
+        }
+    return lit / 16.0;
+}
+
 // An area light's ratio estimator (Heitz et al. 2018): Σ w_k V_k / Σ w_k over its sample views, w_k = f cosθ_x
-// cosθ_y dA / r² (luminance of f), V_k one comparison in view k. `code` packs (first view + 1) × 128 + points × 2
-// + (views per point − 1), 0 for a light without shadows (shadows.py writes it).
+// cosθ_y dA / r² (luminance of f), V_k one comparison in view k. `code` packs (first view + 1) × 256 + points × 4
+// + PCSS × 2 + (views per point − 1), 0 for a light without shadows (shadows.py writes it); a PCSS light has one
+// view at its centre (two for a two-sided light).
 float soft_visibility(float code, vec3 x, mat3 frame, vec3 wo) {
     int c = int(code + 0.5);
     if (c == 0) return 1.0;
-    int first = (c >> 7) - 1, points = (c >> 1) & 63, per_point = (c & 1) + 1;
+    int first = (c >> 8) - 1, points = (c >> 2) & 63, per_point = (c & 1) + 1;
+    if ((c & 2) != 0) {
+        int view = first;
+        if (per_point == 2 && dot(x - shadow_data[SHADOW_RECORD * view + 6].xyz, shadow_data[SHADOW_RECORD * view + 7].xyz) < 0.0)
+            view += 1;
+        return pcss_visibility(view, x, frame[2]);
+    }
     vec3 n = frame[2];
     mat3 to_local = transpose(frame);
     float num = 0.0, den = 0.0;
