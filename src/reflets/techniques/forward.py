@@ -4,8 +4,8 @@ What it computes, exactly or not:
 
 - point and directional lights: exact direct lighting, shadowed by shadow maps with PCF (``shadows.py``);
 - quad and polygon area lights: the midpoint rule of the area-light document (eq 2.8) with ``area_samples``²
-  points per quad (per triangle of a polygon fan), shadowed by the light's soft-shadow ratio; converges as O(1/n²); the dedicated area-light methods
-  (adaptive, cone, LTC, exact diffuse) come with ``reflets.arealights``;
+  points per quad (per triangle of a polygon fan), shadowed by the light's soft-shadow ratio; converges as
+  O(1/n²); the dedicated area-light methods (adaptive, cone, LTC, exact diffuse) come with ``reflets.arealights``;
 - environment maps: ``env_grid`` distant lights whose powers integrate the map exactly (diffuse-accurate,
   blurry for sharp lobes);
 - the image is one sample per pixel at the pixel centre; ``spp`` = s² gives an s×s stratified supersample.
