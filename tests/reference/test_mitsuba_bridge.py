@@ -501,3 +501,17 @@ def test_missing_mitsuba_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "mitsuba", None)  # makes `import mitsuba` raise ImportError
     with pytest.raises(MitsubaUnavailableError, match=r"pip install 'reflets\[reference\]'"):
         mitsuba_module()
+
+
+def test_a_light_without_shadows_is_refused_before_anything_is_written(tmp_path):
+    scene = load_dict(
+        {
+            "camera": {"position": [0, 3, 4], "look_at": [0, 0, 0], "size": list(SIZE)},
+            "materials": {"m": {"type": "lambert"}},
+            "mesh": [{"shape": "plane", "material": "m"}],
+            "light": [{"type": "point", "position": [0, 2, 0], "intensity": [1, 1, 1], "shadows": False}],
+        }
+    )
+    with pytest.raises(SceneError, match=r"light\[0\]\.shadows.*NumPy reference|NumPy reference.*light\[0\]"):
+        to_mitsuba_dict(scene, tmp_path / "work")
+    assert not (tmp_path / "work").exists()

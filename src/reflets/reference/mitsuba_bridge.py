@@ -383,6 +383,13 @@ def to_mitsuba_dict(
     bsdfs = {
         name: material_to_mitsuba(name, scene.materials[name]) for name in sorted({m.material for m in scene.mesh})
     }
+    for i, light in enumerate(scene.light):  # before anything is written
+        if not getattr(light, "shadows", True):
+            raise SceneError(
+                "Mitsuba 3 traces every light's shadows; render this scene with the NumPy reference "
+                "(reflets reference --engine numpy), which honours shadows = false",
+                field=f"light[{i}].shadows",
+            )
     workdir.mkdir(parents=True, exist_ok=True)
 
     out: dict[str, Any] = {"type": "scene", "integrator": {"type": "direct", "hide_emitters": False}}
@@ -394,12 +401,6 @@ def to_mitsuba_dict(
         out[f"mesh_{i}"] = {"type": "ply", "filename": str(path), "face_normals": False, "bsdf": bsdfs[mesh.material]}
 
     for i, light in enumerate(scene.light):
-        if not getattr(light, "shadows", True):
-            raise SceneError(
-                "Mitsuba 3 traces every light's shadows; render this scene with the NumPy reference "
-                "(reflets reference --engine numpy), which honours shadows = false",
-                field=f"light[{i}].shadows",
-            )
         if isinstance(light, PointLight):
             out[f"light_{i}"] = {"type": "point", "position": list(light.position), "intensity": _rgb(light.intensity)}
         elif isinstance(light, DirectionalLight):

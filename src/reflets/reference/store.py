@@ -29,7 +29,22 @@ def fingerprint(scene, **params) -> tuple[str, dict]:
         if mesh.get("file"):
             mesh["file"] = {"name": Path(mesh["file"]).name, "sha256": file_digest(mesh["file"])}
     description = {"scene": description, "version": REFERENCE_VERSION, **params}
-    return content_key(description, length=16), description
+    return _digest(description), description
+
+
+#: scene keys that do not change the image (the gallery's caption)
+PRESENTATION_KEYS = ("title", "description")
+
+
+def _digest(description: dict) -> str:
+    """The digest of what determines the image: the description without its presentation keys, and without
+    light keys at the default that reproduces how older references were made (``shadows = true``: traced), so
+    that editing a caption or adding such a field keeps stored references valid (one of them took 38 minutes)."""
+    scene = {k: v for k, v in description["scene"].items() if k not in PRESENTATION_KEYS}
+    scene["light"] = [
+        {k: v for k, v in light.items() if not (k == "shadows" and v is True)} for light in scene.get("light", [])
+    ]
+    return content_key({**description, "scene": scene}, length=16)
 
 
 def save(path: Path, image, digest: str, description: dict, seconds: float) -> None:
@@ -59,7 +74,7 @@ def load(path: Path, digest: str):
     if not path.exists():
         return None
     with np.load(path) as data:
-        if str(data["fingerprint"]) != digest:
+        if str(data["fingerprint"]) != digest and _digest(json.loads(str(data["description"]))) != digest:
             return None
         shape = tuple(int(v) for v in data["shape"])
         mask = np.unpackbits(data["mask"])[: shape[0] * shape[1]].astype(bool).reshape(shape)
