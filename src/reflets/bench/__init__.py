@@ -24,6 +24,7 @@ SUITES: dict[str, str] = {
     "scratches": "reflets.bench.scratches:bench_scratches",
     "renderer": "reflets.bench.renderer:bench_renderer",
     "shadows": "reflets.bench.shadows:bench_shadows",
+    "ibl": "reflets.bench.ibl:bench_ibl",
 }
 
 

@@ -309,6 +309,8 @@ class Fermat(Forward):
                 **solver,
             )
             uniforms = {**material.uniforms(), **reflector.uniforms()}
+            if self._ibl is not None:  # the environment lights reflected objects as in direct view
+                uniforms.update(self._ibl.uniforms(material))
             textures = material.textures(ctx)
             if scratched:
                 uniforms.update(self._lobes.uniforms(material))
@@ -389,6 +391,7 @@ class Fermat(Forward):
                 "u_reflector_id": reflector_id,
                 "u_hidden_tolerance": self.params.hidden_tolerance * size,
                 **SHADOW_SAMPLERS,  # bound by the forward pass
+                **self._area_runs,
                 **ScratchLobes.frame_uniforms(frame, seed),  # reflected scratched meshes sample per frame
             }
             for program, vao, uniforms, textures in draws:

@@ -67,6 +67,9 @@ class AutoParams(TechniqueParams):
         8, ge=1, le=64, description="n: n×n midpoint samples per quad light where passes use them"
     )
     env_grid: tuple[GridSide, GridSide] = Field((32, 16), description="environment map as nu × nv distant lights")
+    environment: Literal["prefiltered", "grid"] = Field(
+        "prefiltered", description="environment lighting: prefiltered split sum or the env_grid lights"
+    )
     soft_shadows: Literal["ratio", "pcss"] = Field(
         "ratio", description="area lights' soft shadows: the ratio estimator over sample views, or PCSS"
     )
@@ -177,7 +180,9 @@ class Auto(Technique):
         # meshes and materials, lit by some of the lights)
         self.prepared = PreparedScene(self.ctx, scene, shadow_settings(p))
         for k, (method, pass_scene, meshes, additive) in enumerate(plan):
-            technique = get_technique(method)(self.ctx, area_samples=p.area_samples, env_grid=p.env_grid)
+            technique = get_technique(method)(
+                self.ctx, area_samples=p.area_samples, env_grid=p.env_grid, environment=p.environment
+            )
             technique.role = PassRole(meshes=meshes, clear=k == 0, extras=k == len(plan) - 1, additive=additive)
             technique.shared = self.prepared
             technique.prepare(pass_scene)

@@ -36,13 +36,14 @@ from ..scene.meshdata import MeshData
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
 from .base import Technique, TechniqueParams, register_technique
+from .ibl import IBL_FLAGS
 from .prepared import PreparedScene
 from .shading import MaterialShading, shading_for
 from .shadows import SHADOW_SAMPLERS, ShadowSettings
 
 _SHADERS = "reflets/techniques/shaders/"
 #: compile-time light counts of lights.glsl (every program that includes it declares them)
-LIGHT_FLAGS = frozenset({"N_POINT", "N_DIR", "N_AREA", "N_ENV", "SHADOW_VIEWS"})
+LIGHT_FLAGS = frozenset({"N_POINT", "N_DIR", "N_AREA", "N_AREA_LIGHTS", "N_ENV", "SHADOW_VIEWS"}) | IBL_FLAGS
 MESH_PROGRAM = ProgramSpec(
     "forward",
     vertex=_SHADERS + "mesh.vert",
@@ -66,6 +67,9 @@ class ForwardParams(TechniqueParams):
     )
     shadow_samples: int = Field(4, ge=1, le=8, description="ratio: n×n shadow views per quad light")
     env_grid: tuple[GridSide, GridSide] = Field((32, 16), description="environment map as nu × nv distant lights")
+    environment: Literal["prefiltered", "grid"] = Field(
+        "prefiltered", description="environment lighting: prefiltered split sum (ibl.py) or the env_grid lights"
+    )
     output: Literal["radiance", "position", "normal", "uv"] = "radiance"
 
 
@@ -138,6 +142,7 @@ class Forward(Technique):
         self._owns_prepared = self.shared is None
 
         points_l, dirs, area = [], [], []
+        runs = []  # per area light with samples: (first sample, sample count, soft-shadow code, 0)
         shadows = self.prepared.shadows
         for light in scene.light:  # w of a delta light's second row: its first shadow view + 1 (0: no shadow)
             if isinstance(light, PointLight):
@@ -146,9 +151,15 @@ class Forward(Technique):
                 d = -np.asarray(light.direction, dtype=np.float64)
                 dirs += [(*(d / np.linalg.norm(d)), 0.0), (*light.irradiance, shadows.view_index(light) + 1.0)]
             elif isinstance(light, QuadLight | PolygonLight):
-                area += self.area_light_rows(light)
+                rows = self.area_light_rows(light)
+                if rows:
+                    runs.append((len(area) // 3, len(rows) // 3, shadows.soft_code(light), 0.0))
+                area += rows
         env = []
-        if scene.environment is not None:
+        self._ibl = None
+        if scene.environment is not None and self.params.environment == "prefiltered":
+            self._ibl = self.prepared.prefiltered_environment()
+        elif scene.environment is not None:
             env_dirs, env_power = environment_grid(self.prepared.environment, scene.environment, self.params.env_grid)
             keep = np.any(env_power > 0, axis=1)
             for d, pw in zip(env_dirs[keep], env_power[keep], strict=True):
@@ -161,11 +172,14 @@ class Forward(Technique):
             "N_POINT": len(points_l) // 2,
             "N_DIR": len(dirs) // 2,
             "N_AREA": len(area) // 3,
+            "N_AREA_LIGHTS": len(runs),
             "N_ENV": len(env) // 2,
             "SHADOW_VIEWS": shadows.view_count,
+            **(self._ibl.flags() if self._ibl is not None else {"ENV_IBL": 0}),
             **self.extra_light_flags(polygons),
         }
         self._light_buffers = [self._ssbo(rows) for rows in (points_l, dirs, area, env, polygons)]
+        self._area_runs = {"u_area_runs": np.asarray(runs, np.float32).tobytes()} if runs else {}
 
         self.shadings = self.material_shadings(scene)
         self._draws = []
@@ -197,6 +211,8 @@ class Forward(Technique):
             uniforms = {**material.uniforms(), **shading.uniforms(material)}
             own_textures = shading.textures(material)
         vao = self.mesh_vertex_array(program, index)
+        if self._ibl is not None:
+            uniforms.update(self._ibl.uniforms(material))
         return program, vao, uniforms, material.textures(ctx), own_textures, shading
 
     # ------------------------------------------------------------------ how this technique shades
@@ -241,11 +257,10 @@ class Forward(Technique):
             t = (np.arange(n) + 0.5) / n
             u, v = np.meshgrid(t, t, indexing="xy")
             weight = mask_lookup(mask, u.ravel(), v.ravel())
-        code = self.prepared.shadows.soft_code(light)  # the light's soft-shadow views
         rows = []
         for y, a, m in zip(pts, dA, weight, strict=True):
             if m > 0.0:
-                rows += [(*y, a), (*nl, float(light.two_sided)), (*(m * np.asarray(light.radiance)), code)]
+                rows += [(*y, a), (*nl, float(light.two_sided)), (*(m * np.asarray(light.radiance)), 0.0)]
         return rows
 
     def polygon_rows(self, scene: Scene) -> list[tuple]:
@@ -349,8 +364,10 @@ class Forward(Technique):
         for i, buf in enumerate(self._light_buffers):
             buf.bind_to_storage_buffer(i)
         self.prepared.shadows.bind()
+        if self._ibl is not None:
+            self._ibl.bind()
         eye = tuple(float(c) for c in self.scene.camera.position)
-        per_frame = {**self.frame_uniforms(frame, seed), **SHADOW_SAMPLERS}
+        per_frame = {**self.frame_uniforms(frame, seed), **SHADOW_SAMPLERS, **self._area_runs}
         for program, vao, uniforms, material_textures, own_textures, shading in filter(None, self._draws):
             samplers = {}
             textures = {**material_textures, **own_textures}

@@ -20,6 +20,7 @@ from ..scene.geometry import bounding_sphere, mesh_data
 from ..scene.lightmask import load_masks, quad_uv
 from ..scene.meshdata import MeshData
 from ..scene.model import PolygonLight, QuadLight, Scene
+from .ibl import PrefilteredEnvironment
 from .shadows import DEFAULT_SHADOWS, ShadowMaps, ShadowSettings
 
 _SHADERS = "reflets/techniques/shaders/"
@@ -55,7 +56,14 @@ class PreparedScene:
         #: (centre, radius) of every mesh vertex and emitter corner, (None, 0) for an empty scene: the clip planes
         self.bounds = bounding_sphere(all_points) if len(all_points) else (None, 0.0)
         #: the lights' shadow maps (every mesh casts)
+        self._ibl = None
         self.shadows = ShadowMaps(ctx, scene, self.meshes, self._every_mesh, self.mask_of, shadow_settings)
+
+    def prefiltered_environment(self) -> PrefilteredEnvironment:
+        """The environment's prefiltered maps, made when a pass first asks (the GPU prefiltering runs once)."""
+        if self._ibl is None:
+            self._ibl = PrefilteredEnvironment(self.ctx, self.environment, self.scene.environment)
+        return self._ibl
 
     def _every_mesh(self, program) -> list:
         return [self.vertex_array(program, i) for i in range(len(self.meshes))]
@@ -109,6 +117,9 @@ class PreparedScene:
 
     def release(self) -> None:
         self.shadows.release()
+        if self._ibl is not None:
+            self._ibl.release()
+            self._ibl = None
         release_objects(self.ctx, self._objects)
         self._objects = []
         self._mesh_buffers = {}

@@ -135,8 +135,10 @@ vec3 scratched_radiance(vec3 x, mat3 frame, vec3 wo, vec2 uv, uvec2 pixel) {
         // quad / polygon lights: each midpoint sample of the emitter (the forward pass's area_samples² per quad)
         // as a thickened light of irradiance L cosθ_y dA / r² — the lobes see the emitter as that many small
         // sources, smoothed by the thickening (documented approximation; converges as area_samples grows)
-        float shadow_code = -1.0, shadow = 1.0;  // each light's soft-shadow ratio, once per run of its samples
-        for (int i = 0; i < N_AREA; ++i) {
+        for (int l = 0; l < N_AREA_LIGHTS; ++l) {  // each light's soft-shadow ratio once, then its samples
+        float shadow = soft_visibility(u_area_runs[l].z, x, frame, wo);
+        int first = int(u_area_runs[l].x + 0.5), end = first + int(u_area_runs[l].y + 0.5);
+        for (int i = first; i < end; ++i) {
             vec4 p = area_data[3 * i];
             vec4 nl = area_data[3 * i + 1];
             vec3 d = p.xyz - x;
@@ -145,11 +147,8 @@ vec3 scratched_radiance(vec3 x, mat3 frame, vec3 wo, vec2 uv, uvec2 pixel) {
             float cos_y = -dot(nl.xyz, wi);
             if (nl.w > 0.5) cos_y = abs(cos_y);
             if (cos_y <= 0.0) continue;
-            if (area_data[3 * i + 2].w != shadow_code) {
-                shadow_code = area_data[3 * i + 2].w;
-                shadow = soft_visibility(shadow_code, x, frame, wo);
-            }
             sum += thick_light(wo, transpose(frame) * wi, area_data[3 * i + 2].rgb * (shadow * cos_y * p.w / r2), norm, rng);
+        }
         }
 #endif
 #if S_ENV_SAMPLES > 0

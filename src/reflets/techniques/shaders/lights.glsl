@@ -2,10 +2,34 @@
 // Light data arrive in std430 buffers filled by reflets/techniques/forward.py (layouts documented there).
 layout(std430, binding = 0) readonly buffer PointLights { vec4 point_data[]; };   // position, intensity
 layout(std430, binding = 1) readonly buffer DirLights { vec4 dir_data[]; };       // to-light dir, irradiance
-layout(std430, binding = 2) readonly buffer AreaSamples { vec4 area_data[]; };    // (y, dA), (n_L, two_sided), (L, shadow code)
+layout(std430, binding = 2) readonly buffer AreaSamples { vec4 area_data[]; };    // (y, dA), (n_L, two_sided), (L, 0)
+#if N_AREA > 0
+uniform vec4 u_area_runs[N_AREA_LIGHTS];  // per area light: its first sample, sample count, soft-shadow code
+#endif
 layout(std430, binding = 3) readonly buffer EnvSamples { vec4 env_data[]; };      // direction, L * solid angle
 
 #include "reflets/techniques/shaders/shadows.glsl"
+
+// ENV_IBL: the environment by the split sum (reflets/techniques/ibl.py) instead of the N_ENV grid.
+#if ENV_IBL
+uniform sampler2D u_ibl_radiance;       // GGX-prefiltered radiance; mip k: α = (k / (IBL_LEVELS − 1))²
+uniform sampler2D u_ibl_irradiance;     // ∫ L max(0, n·ω) dω per normal
+uniform mat3 u_ibl_env_from_world;
+uniform vec3 u_ibl_albedo[IBL_NODES];  // the material's specular directional albedo at μ = (k + ½) / IBL_NODES
+uniform vec3 u_ibl_diffuse;            // its Lambertian albedo
+uniform float u_ibl_alpha;             // its main lobe's GGX-equivalent roughness
+
+vec3 image_based_lighting(vec3 n, vec3 v) {
+    vec3 diffuse = u_ibl_diffuse * INV_PI * texture(u_ibl_irradiance, equirect_uv(u_ibl_env_from_world * n)).rgb;
+    float x = clamp(dot(n, v), 0.0, 1.0) * float(IBL_NODES) - 0.5;
+    int k0 = clamp(int(floor(x)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);
+    vec3 albedo = mix(u_ibl_albedo[k0], u_ibl_albedo[k1], clamp(x - float(k0), 0.0, 1.0));
+    vec3 r = reflect(-v, n);
+    float level = sqrt(u_ibl_alpha) * float(IBL_LEVELS - 1);
+    vec3 prefiltered = textureLod(u_ibl_radiance, equirect_uv(u_ibl_env_from_world * r), level).rgb;
+    return diffuse + albedo * prefiltered;
+}
+#endif
 
 // Light counts N_POINT, N_DIR, N_AREA, N_ENV are compile-time flags, and a light type the scene lacks gets no
 // code at all: on llvmpipe a loop whose trip count is a constant 0 still costs nearly a light's shading
@@ -39,10 +63,13 @@ vec3 direct_lighting(vec3 x, mat3 frame, vec3 wo) {
     }
 #endif
     // Area lights as weighted midpoint samples (eq 2.8 of the area-light document): f L cosθx cosθy / r² dA.
-    // Shadows: each light's soft-shadow ratio (shadows.glsl), computed once per run of its samples.
+    // Shadows: each light's soft-shadow ratio (shadows.glsl), once per light: a branch inside the sample loop
+    // would run for every sample on llvmpipe.
 #if N_AREA > 0
-    float shadow_code = -1.0, shadow = 1.0;
-    for (int i = 0; i < N_AREA; ++i) {
+    for (int l = 0; l < N_AREA_LIGHTS; ++l) {
+    float shadow = soft_visibility(u_area_runs[l].z, x, frame, wo);
+    int first = int(u_area_runs[l].x + 0.5), end = first + int(u_area_runs[l].y + 0.5);
+    for (int i = first; i < end; ++i) {
         vec4 p = area_data[3 * i];
         vec4 nl = area_data[3 * i + 1];
         vec3 d = p.xyz - x;
@@ -52,11 +79,8 @@ vec3 direct_lighting(vec3 x, mat3 frame, vec3 wo) {
         float cos_y = -dot(nl.xyz, wi);
         if (nl.w > 0.5) cos_y = abs(cos_y);
         if (cos_x <= 0.0 || cos_y <= 0.0) continue;
-        if (area_data[3 * i + 2].w != shadow_code) {
-            shadow_code = area_data[3 * i + 2].w;
-            shadow = soft_visibility(shadow_code, x, frame, wo);
-        }
         sum += brdf_eval(wo, to_local * wi) * area_data[3 * i + 2].rgb * (shadow * cos_x * cos_y * p.w / r2);
+    }
     }
 #endif
 #if N_ENV > 0
@@ -66,6 +90,9 @@ vec3 direct_lighting(vec3 x, mat3 frame, vec3 wo) {
         if (cos_x <= 0.0) continue;
         sum += brdf_eval(wo, to_local * wi) * env_data[2 * i + 1].rgb * cos_x;
     }
+#endif
+#if ENV_IBL
+    sum += image_based_lighting(n, frame * wo);
 #endif
     return sum;
 }

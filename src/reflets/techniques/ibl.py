@@ -1,0 +1,178 @@
+"""Prefiltered image-based lighting: the environment as a split-sum approximation instead of a grid of lights.
+
+For a material lit by the environment map L, the reflected radiance is split (Karis 2013's split sum, as in
+Filament and Unreal) into
+
+- a diffuse part ρ_d / π · E(n), E the irradiance map: the map's exact cosine convolution, computed in NumPy on
+  a downsampled copy of the map (``IRRADIANCE_SIZE`` normals × ``SOURCE_SIZE`` source texels, one matrix
+  product) and looked up bilinearly;
+- a specular part A(μ) · P(r, α): P the map prefiltered with GGX lobes of roughness α (``shaders/
+  ibl_prefilter.comp``: ``PREFILTER_SAMPLES`` importance samples per texel with N = V = R, each read at the
+  source mip matching its solid angle — filtered importance sampling), one mip level per roughness
+  (level k: α = (k / (LEVELS − 1))²), read along the mirror direction r at the material's equivalent α; and
+  A(μ) the **material's own** specular directional albedo — ∫ f cos θ_i dω_i minus its Lambertian albedo, by
+  importance sampling of its NumPy ``eval`` / ``sample`` at ``ALBEDO_NODES`` values of μ = n·v — so that the
+  split sum applies to every BRDF of the library, not only GGX (the lobe's shape enters through α only:
+  ``Material.lobe_summary``'s Phong / Blinn-Phong exponent mapped to GGX α, see ``equivalent_alpha``).
+
+The prefiltering runs on the GPU once per environment (a persistent renderer keeps it); the albedo curves once
+per material. What the approximation costs is measured by ``reflets bench ibl`` against the reference.
+"""
+
+from __future__ import annotations
+
+import math
+
+import moderngl
+import numpy as np
+
+from ..equirect import equirect_direction, rotation_y
+from ..gpu import ProgramSpec, get_program, release_objects, set_uniforms
+
+_SHADERS = "reflets/techniques/shaders/"
+PREFILTER_PROGRAM = ProgramSpec("ibl_prefilter", compute=_SHADERS + "ibl_prefilter.comp")
+#: prefiltered map: level 0 size and mip levels (level k holds α = (k / (LEVELS − 1))²)
+PREFILTER_SIZE = (256, 128)
+LEVELS = 7
+PREFILTER_SAMPLES = 256
+#: irradiance map (normals) and the downsampled source it integrates
+IRRADIANCE_SIZE = (64, 32)
+SOURCE_SIZE = (128, 64)
+#: μ = n·v nodes of a material's specular albedo curve
+ALBEDO_NODES = 32
+ALBEDO_SAMPLES = 4096
+#: texture units of the prefiltered and irradiance maps
+IBL_UNITS = (9, 8)
+#: compile-time flags of the IBL code in lights.glsl
+IBL_FLAGS = frozenset({"ENV_IBL", "IBL_LEVELS", "IBL_NODES"})
+
+
+def _downsample(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """Box-filter an equirectangular map to (width, height) (exact when the sizes divide; else nearest blocks)."""
+    h, w, _ = image.shape
+    rows = np.minimum((np.arange(h) * size[1]) // h, size[1] - 1)
+    cols = np.minimum((np.arange(w) * size[0]) // w, size[0] - 1)
+    theta = (np.arange(h) + 0.5) / h * np.pi
+    weight = np.sin(theta)[:, None] * np.ones((1, w))  # solid angle ∝ sin θ
+    out = np.zeros((size[1], size[0], 3))
+    norm = np.zeros((size[1], size[0], 1))
+    np.add.at(out, (rows[:, None], cols[None, :]), image.astype(np.float64) * weight[..., None])
+    np.add.at(norm, (rows[:, None], cols[None, :]), weight[..., None])
+    return out / np.maximum(norm, 1e-30)
+
+
+def irradiance_map(image: np.ndarray) -> np.ndarray:
+    """E(n) = ∫ L(ω) max(0, n·ω) dω on an equirectangular grid of normals (the map's own frame), float32."""
+    source = _downsample(image, SOURCE_SIZE)
+    sh, sw = source.shape[:2]
+    theta_edges = np.linspace(0.0, np.pi, sh + 1)
+    omega = (2.0 * np.pi / sw) * (np.cos(theta_edges[:-1]) - np.cos(theta_edges[1:]))
+    u, v = (np.arange(sw) + 0.5) / sw, (np.arange(sh) + 0.5) / sh
+    dirs = equirect_direction(u[None, :], v[:, None]).reshape(-1, 3)
+    power = (source * omega[:, None, None]).reshape(-1, 3)
+    w, h = IRRADIANCE_SIZE
+    normals = equirect_direction(((np.arange(w) + 0.5) / w)[None, :], ((np.arange(h) + 0.5) / h)[:, None])
+    cosines = np.maximum(normals.reshape(-1, 3) @ dirs.T, 0.0)
+    return (cosines @ power).reshape(h, w, 3).astype(np.float32)
+
+
+def equivalent_alpha(material) -> float:
+    """The GGX roughness whose prefiltered lobe stands for the material's main specular lobe: a Blinn-Phong
+    exponent e ↦ α = √(2 / (e + 2)) (Walter et al. 2007's correspondence), a Phong lobe about the mirror
+    direction as the Blinn-Phong lobe of exponent 4e (the half-vector lobe is four times wider); no lobe: 1."""
+    _, kind, exponent = material.lobe_summary()
+    if kind == 0 or exponent <= 0:
+        return 1.0
+    e = 4.0 * exponent if kind == 1 else exponent
+    return float(min(1.0, math.sqrt(2.0 / (e + 2.0))))
+
+
+def specular_albedo(material, nodes: int = ALBEDO_NODES, samples: int = ALBEDO_SAMPLES) -> np.ndarray:
+    """(nodes, 3): ∫ f(ω_o, ω_i) cos θ_i dω_i at μ = cos θ_o = (k + ½) / nodes, minus the Lambertian albedo,
+    by stratified importance sampling of the material's own ``sample`` (deterministic)."""
+    diffuse = np.asarray(material.lambertian_split()[0], np.float64)
+    side = int(math.isqrt(samples))
+    t = (np.arange(side) + 0.5) / side
+    u1, u2 = (a.ravel() for a in np.meshgrid(t, t, indexing="ij"))
+    out = np.zeros((nodes, 3))
+    for k in range(nodes):
+        mu = (k + 0.5) / nodes
+        wo = np.broadcast_to(np.array([math.sqrt(max(0.0, 1.0 - mu * mu)), 0.0, mu]), (len(u1), 3))
+        wi, pdf = material.sample(np.ascontiguousarray(wo), u1, u2)
+        ok = (pdf > 0) & (wi[..., 2] > 0)
+        f = material.eval(np.ascontiguousarray(wo[ok]), wi[ok])
+        out[k] = np.sum(f * (wi[ok, 2] / pdf[ok])[:, None], axis=0) / len(u1)
+    return np.maximum(out - diffuse, 0.0)
+
+
+class PrefilteredEnvironment:
+    """The prefiltered radiance and irradiance maps of one environment on one context (module docstring)."""
+
+    def __init__(self, ctx, image: np.ndarray, light):
+        self.ctx = ctx
+        self._objects: list = []
+        self.env_from_world = rotation_y(light.rotate_y).astype(np.float32).tobytes()  # R^T, column-major
+        source = ctx.texture((image.shape[1], image.shape[0]), 3, np.ascontiguousarray(image).tobytes(), dtype="f4")
+        self._own(source)
+        source.repeat_x, source.repeat_y = True, False
+        source.build_mipmaps()
+        source.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+        w, h = PREFILTER_SIZE
+        self.radiance = self._own(ctx.texture((w, h), 4, dtype="f4"))
+        self.radiance.build_mipmaps(0, LEVELS - 1)  # allocates levels 0 … LEVELS − 1
+        self.radiance.repeat_x, self.radiance.repeat_y = True, False
+        program = get_program(ctx, PREFILTER_PROGRAM)
+        source.use(0)
+        texel_omega = 4.0 * math.pi / (image.shape[0] * image.shape[1])
+        for level in range(LEVELS):
+            lw, lh = max(1, w >> level), max(1, h >> level)
+            self.radiance.bind_to_image(0, read=False, write=True, level=level)
+            alpha = (level / (LEVELS - 1)) ** 2
+            set_uniforms(
+                program,
+                {
+                    "u_source": 0,
+                    "u_alpha": float(alpha),
+                    "u_samples": PREFILTER_SAMPLES,
+                    "u_size": (lw, lh),
+                    "u_source_texel_omega": float(texel_omega),
+                    "u_copy_lod": float(max(0.0, math.log2(image.shape[1] / lw))),
+                },
+            )
+            program.run(group_x=-(-lw // 8), group_y=-(-lh // 8))
+        ctx.memory_barrier()
+        self.radiance.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+        irradiance = irradiance_map(image)
+        self.irradiance = self._own(ctx.texture(IRRADIANCE_SIZE, 3, irradiance.tobytes(), dtype="f4"))
+        self.irradiance.repeat_x, self.irradiance.repeat_y = True, False
+        self.irradiance.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        self._albedo: dict[str, bytes] = {}
+
+    def flags(self) -> dict[str, int]:
+        return {"ENV_IBL": 1, "IBL_LEVELS": LEVELS, "IBL_NODES": ALBEDO_NODES}
+
+    def uniforms(self, material) -> dict[str, object]:
+        """The material's split-sum inputs (its albedo curve computed once per material)."""
+        key = material.model_dump_json()
+        if key not in self._albedo:
+            self._albedo[key] = specular_albedo(material).astype(np.float32).tobytes()
+        return {
+            "u_ibl_albedo": self._albedo[key],
+            "u_ibl_diffuse": tuple(float(c) for c in material.lambertian_split()[0]),
+            "u_ibl_alpha": equivalent_alpha(material),
+            "u_ibl_env_from_world": self.env_from_world,
+            "u_ibl_radiance": IBL_UNITS[0],
+            "u_ibl_irradiance": IBL_UNITS[1],
+        }
+
+    def bind(self) -> None:
+        self.radiance.use(IBL_UNITS[0])
+        self.irradiance.use(IBL_UNITS[1])
+
+    def _own(self, obj):
+        self._objects.append(obj)
+        return obj
+
+    def release(self) -> None:
+        release_objects(self.ctx, self._objects)
+        self._objects = []
