@@ -5,8 +5,7 @@
   k-th frame: one-shot frames cost seconds on a software rasteriser), the two images compared; the cost of each
   pass of one frame (a ``ctx.finish()`` after each pass);
 - each showcase object against ground truth, in the pixels where it is the nearest surface: the composed frame
-  against the NumPy reference (shadow rays, as the GPU's shadow maps; the sky's occlusion is not rendered by the
-  GPU yet, which shows under the objects), and the marble alone
+  against the NumPy reference (shadow rays, as the GPU's shadow maps and environment views), and the marble alone
   under each of its lights against the volumetric reference (all orders of scattering, η = 1.5 refracted): the
   ``translucent`` technique auto uses for the point light, the far-field BRDF it uses for the quad light and
   the sky;
@@ -202,7 +201,7 @@ def _objects(size, spp: int, reference_spp: int, volumetric_spp: int, out_dir) -
         f"## Each showcase object against ground truth ({size[0]}×{size[1]})",
         "",
         f"The composed frame (auto, {spp} spp) against the NumPy reference ({reference_spp} spp, shadow rays — the "
-        "GPU does not occlude the sky yet, which shows under the objects; its pixels sampled as auto samples them), "
+        "GPU's shadow maps and environment views; its pixels sampled as auto samples them), "
         "relative MSE over the "
         "pixels where the object is the nearest surface (the scratched plate has no reference in a general scene: "
         "its lobes are singular, the reference sees only its base layer; its ground truth is the brushed plate of "

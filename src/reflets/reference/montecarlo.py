@@ -227,9 +227,9 @@ class MonteCarloReference:
         hit_b = geo.intersect(origin, wi_b_world, emitters_only=not self.visibility)
         # lights with shadows = false see the BRDF sample as if nothing but emitters were there
         unshadowed = [not getattr(sampler.light, "shadows", True) for sampler in self.area]
-        hit_free = (
-            geo.intersect(origin, wi_b_world, emitters_only=True) if self.visibility and any(unshadowed) else hit_b
-        )
+        env_unshadowed = self.env is not None and not self.scene.environment.shadows
+        free = self.visibility and (any(unshadowed) or env_unshadowed)
+        hit_free = geo.intersect(origin, wi_b_world, emitters_only=True) if free else hit_b
 
         for j, sampler in enumerate(self.area):
             # Light sampling.
@@ -264,12 +264,15 @@ class MonteCarloReference:
             fcos, wi_local = brdf(wi)
             p_brdf = self._pdf_brdf(surf.material, wo, wi_local)
             far = np.full(len(x), 4.0 * geo.radius + np.linalg.norm(x - geo.centre, axis=-1))
-            ok = (p_env > 0) & self._unoccluded(origin, wi, far)
+            ok = (p_env > 0) & self._unoccluded(origin, wi, far, self.scene.environment)
             weight = _mis(p_env, p_brdf, self.heuristic)
             contrib = fcos * self.env.radiance(wi) * (weight / np.where(ok, p_env, 1.0))[:, None]
             result += np.where(ok[:, None], contrib, 0.0)
             # Unoccluded mode casts BRDF rays at the emitters only: anything else reaches the environment.
-            escaped = valid_b & ((hit_b.kind < 0) if self.visibility else (hit_b.kind != EMITTERS))
+            if self.visibility and not env_unshadowed:
+                escaped = valid_b & (hit_b.kind < 0)
+            else:
+                escaped = valid_b & ((hit_free if self.visibility else hit_b).kind != EMITTERS)
             if np.any(escaped):
                 w_b = _mis(pdf_b[escaped], self.env.pdf(wi_b_world[escaped]), self.heuristic)
                 add = fcos_b[escaped] * self.env.radiance(wi_b_world[escaped]) * (w_b / pdf_b[escaped])[:, None]

@@ -391,7 +391,7 @@ class Fermat(Forward):
                 "u_reflector_id": reflector_id,
                 "u_hidden_tolerance": self.params.hidden_tolerance * size,
                 **SHADOW_SAMPLERS,  # bound by the forward pass
-                **self._area_runs,
+                **self._light_uniforms,
                 **ScratchLobes.frame_uniforms(frame, seed),  # reflected scratched meshes sample per frame
             }
             for program, vao, uniforms, textures in draws:

@@ -319,6 +319,7 @@ class EnvironmentLight(Strict):
     file: Path
     scale: NonNeg = 1.0
     rotate_y: Finite = 0.0
+    shadows: bool = Field(True, description="occluded by the scene (GPU: shadow maps from 32 directions)")
 
 
 LIGHT_MODELS = {

@@ -6,8 +6,9 @@ What it computes, exactly or not:
 - quad and polygon area lights: the midpoint rule of the area-light document (eq 2.8) with ``area_samples``²
   points per quad (per triangle of a polygon fan), shadowed by the light's soft-shadow ratio; converges as
   O(1/n²); the dedicated area-light methods (adaptive, cone, LTC, exact diffuse) come with ``reflets.arealights``;
-- environment maps: ``env_grid`` distant lights whose powers integrate the map exactly (diffuse-accurate,
-  blurry for sharp lobes);
+- environment maps: by default the prefiltered split sum (``ibl.py``: GGX-prefiltered radiance, the irradiance
+  map, each material's own specular albedo); ``environment = "grid"``: ``env_grid`` distant lights whose
+  powers integrate the map exactly (diffuse-accurate, blurry for sharp lobes; not occluded by the scene);
 - the image is one sample per pixel at the pixel centre; ``spp`` = s² gives an s×s stratified supersample.
 
 Buffer layouts (std430, vec4 each): points (position, intensity); directional (unit vector towards the
@@ -43,7 +44,9 @@ from .shadows import SHADOW_SAMPLERS, ShadowSettings
 
 _SHADERS = "reflets/techniques/shaders/"
 #: compile-time light counts of lights.glsl (every program that includes it declares them)
-LIGHT_FLAGS = frozenset({"N_POINT", "N_DIR", "N_AREA", "N_AREA_LIGHTS", "N_ENV", "SHADOW_VIEWS"}) | IBL_FLAGS
+LIGHT_FLAGS = (
+    frozenset({"N_POINT", "N_DIR", "N_AREA", "N_AREA_LIGHTS", "N_ENV", "SHADOW_VIEWS", "ENV_VIEWS"}) | IBL_FLAGS
+)
 MESH_PROGRAM = ProgramSpec(
     "forward",
     vertex=_SHADERS + "mesh.vert",
@@ -176,10 +179,13 @@ class Forward(Technique):
             "N_ENV": len(env) // 2,
             "SHADOW_VIEWS": shadows.view_count,
             **(self._ibl.flags() if self._ibl is not None else {"ENV_IBL": 0}),
+            "ENV_VIEWS": shadows.environment_views[1] if self._ibl is not None and shadows.environment_views else 0,
             **self.extra_light_flags(polygons),
         }
         self._light_buffers = [self._ssbo(rows) for rows in (points_l, dirs, area, env, polygons)]
-        self._area_runs = {"u_area_runs": np.asarray(runs, np.float32).tobytes()} if runs else {}
+        self._light_uniforms = {"u_area_runs": np.asarray(runs, np.float32).tobytes()} if runs else {}
+        if shadows.environment_views:
+            self._light_uniforms["u_env_first_view"] = shadows.environment_views[0]
 
         self.shadings = self.material_shadings(scene)
         self._draws = []
@@ -367,7 +373,7 @@ class Forward(Technique):
         if self._ibl is not None:
             self._ibl.bind()
         eye = tuple(float(c) for c in self.scene.camera.position)
-        per_frame = {**self.frame_uniforms(frame, seed), **SHADOW_SAMPLERS, **self._area_runs}
+        per_frame = {**self.frame_uniforms(frame, seed), **SHADOW_SAMPLERS, **self._light_uniforms}
         for program, vao, uniforms, material_textures, own_textures, shading in filter(None, self._draws):
             samplers = {}
             textures = {**material_textures, **own_textures}

@@ -57,7 +57,9 @@ class PreparedScene:
         self.bounds = bounding_sphere(all_points) if len(all_points) else (None, 0.0)
         #: the lights' shadow maps (every mesh casts)
         self._ibl = None
-        self.shadows = ShadowMaps(ctx, scene, self.meshes, self._every_mesh, self.mask_of, shadow_settings)
+        self.shadows = ShadowMaps(
+            ctx, scene, self.meshes, self._every_mesh, self.mask_of, shadow_settings, self.environment
+        )
 
     def prefiltered_environment(self) -> PrefilteredEnvironment:
         """The environment's prefiltered maps, made when a pass first asks (the GPU prefiltering runs once)."""

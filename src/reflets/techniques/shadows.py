@@ -29,7 +29,8 @@ within ``MAX_ATLAS`` texels per side (many lights: smaller maps).
 View record in the storage buffer (``RECORD`` vec4 each): [0..3] view-projection columns, [4] atlas tile (uv of
 its corner, uv size), [5] (world texel size: per unit distance along the axis for a perspective view; near and
 far of a soft-shadow view, 0),
-[6] sample point y and its weight dA × mask, [7] the view's axis (the emitting normal, or its opposite).
+[6] sample point y and its weight dA × mask, [7] the view's axis (the emitting normal, or its opposite); an
+environment view: [6] its direction and weight, [7] its weight per channel.
 """
 
 from __future__ import annotations
@@ -41,10 +42,11 @@ from typing import Literal
 import moderngl
 import numpy as np
 
+from ..equirect import equirect_direction, rotation_y
 from ..gpu import ProgramSpec, get_program, release_objects, set_uniforms
 from ..scene.emitters import area_light_samples, polygon_normal
 from ..scene.lightmask import mask_lookup
-from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
+from ..scene.model import DirectionalLight, EnvironmentLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
 
 _SHADERS = "reflets/techniques/shaders/"
@@ -64,6 +66,10 @@ SLOPE_BIAS, CONSTANT_BIAS = 2.0, 4.0
 RECORD = 8
 #: a quad light's soft shadows: SOFT_SIDE² sample views by default (a polygon: about as many over its fan)
 SOFT_SIDE = 4
+#: the environment's occlusion: ENV_SAMPLES directions drawn ∝ the map's power (stratified, deterministic;
+#: a direction drawn k times is one view of weight k), one orthographic view each; the environment's light is
+#: weighted by the visible fraction of them (a sun gets its own exact direction: its shadow lands in place)
+ENV_SAMPLES = 32
 #: soft-shadow designs: the ratio estimator over sample views, or PCSS from one view at the emitter's centre
 SOFT_DESIGNS = ("ratio", "pcss")
 
@@ -93,14 +99,19 @@ CUBE_FACES = (
 class ShadowMaps:
     """The shadow views of a scene's lights, drawn into one depth atlas (see the module docstring)."""
 
-    def __init__(self, ctx, scene: Scene, meshes, meshes_vertex_array, mask_of, settings=DEFAULT_SHADOWS):
+    def __init__(
+        self, ctx, scene: Scene, meshes, meshes_vertex_array, mask_of, settings=DEFAULT_SHADOWS, environment=None
+    ):
         """``meshes``: the scene's ``MeshData`` (world space); ``meshes_vertex_array(program)``: vertex arrays of
-        every mesh for a program (the prepared scene's); ``mask_of(light)``: a quad light's mask or None."""
+        every mesh for a program (the prepared scene's); ``mask_of(light)``: a quad light's mask or None;
+        ``environment``: the environment map (H, W, 3) or None."""
         self.ctx = ctx
         self.scene = scene
         self.settings = settings
         self._first_view: dict[int, int] = {}  # light index → its first view
         self._soft: dict[int, tuple[int, int, int]] = {}  # area light index → (first view, points, views per point)
+        #: the environment's occlusion views: (first view, count), or None
+        self.environment_views: tuple[int, int] | None = None
         views: list[dict] = []
         boxes = np.array([[m.positions.min(axis=0), m.positions.max(axis=0)] for m in meshes if len(m.positions)])
         if len(boxes):
@@ -121,6 +132,11 @@ class ShadowMaps:
                 for y, w in zip(points, weights, strict=True):
                     views += [_sample_view(y, axis, w, corners) for axis in axes]
                 self._soft[index] = (first, len(points), len(axes))
+            elif isinstance(light, EnvironmentLight) and environment is not None:
+                for d, w, rgb in zip(*environment_directions(environment, light), strict=True):
+                    view = _directional_view(-d, centre, radius)
+                    views.append({**view, "point": tuple(d), "weight": float(w), "axis": tuple(rgb)})
+                self.environment_views = (first, len(views) - first)
             else:
                 continue
             self._first_view[index] = first
@@ -248,6 +264,26 @@ def _directional_view(direction: np.ndarray, centre: np.ndarray, radius: float) 
     proj = np.diag([1.0 / radius, 1.0 / radius, -2.0 / (far - near), 1.0])
     proj[2, 3] = -(far + near) / (far - near)
     return {"view_proj": proj @ look_at(eye, centre, up), "texel": 2.0 * radius}
+
+
+def environment_directions(image: np.ndarray, light, count: int = ENV_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
+    """World directions drawn ∝ the map's luminance × solid angle at stratified positions of its CDF (pixel
+    centres), merged: (directions (K, 3), how many of the ``count`` samples each got, that × the pixel's colour
+    over its luminance (K, 3): the sample's weight per channel, so that a yellow sun hidden leaves a blue sky)."""
+    h, w, _ = image.shape
+    theta = np.linspace(0.0, np.pi, h + 1)
+    omega = (2.0 * np.pi / w) * (np.cos(theta[:-1]) - np.cos(theta[1:]))
+    power = (image.astype(np.float64) @ np.array([0.2126, 0.7152, 0.0722])) * omega[:, None]
+    cdf = np.cumsum(power.ravel())
+    if cdf[-1] <= 0:
+        return np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3))
+    picks = np.searchsorted(cdf / cdf[-1], (np.arange(count) + 0.5) / count, side="right")
+    pixels, counts = np.unique(np.minimum(picks, h * w - 1), return_counts=True)
+    rows, cols = np.divmod(pixels, w)
+    local = equirect_direction((cols + 0.5) / w, (rows + 0.5) / h)
+    rgb = image[rows, cols].astype(np.float64)
+    colour = rgb / np.maximum(rgb @ np.array([0.2126, 0.7152, 0.0722]), 1e-30)[:, None]
+    return local @ rotation_y(light.rotate_y).T, counts.astype(np.float64), counts[:, None] * colour
 
 
 def _soft_samples(light, mask, settings: ShadowSettings) -> tuple[np.ndarray, np.ndarray]:

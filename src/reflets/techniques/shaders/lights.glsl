@@ -19,15 +19,20 @@ uniform vec3 u_ibl_albedo[IBL_NODES];  // the material's specular directional al
 uniform vec3 u_ibl_diffuse;            // its Lambertian albedo
 uniform float u_ibl_alpha;             // its main lobe's GGX-equivalent roughness
 
-vec3 image_based_lighting(vec3 n, vec3 v) {
+vec3 image_based_lighting(vec3 x, mat3 frame, vec3 wo) {
+    vec3 n = frame[2], v = frame * wo;
+    vec3 seen_diffuse = vec3(1.0), seen_specular = vec3(1.0);
+#if ENV_VIEWS > 0 && SHADOW_VIEWS > 0
+    environment_visibility(x, frame, wo, seen_diffuse, seen_specular);  // the scene's occlusion (shadows.glsl)
+#endif
     vec3 diffuse = u_ibl_diffuse * INV_PI * texture(u_ibl_irradiance, equirect_uv(u_ibl_env_from_world * n)).rgb;
-    float x = clamp(dot(n, v), 0.0, 1.0) * float(IBL_NODES) - 0.5;
-    int k0 = clamp(int(floor(x)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);
-    vec3 albedo = mix(u_ibl_albedo[k0], u_ibl_albedo[k1], clamp(x - float(k0), 0.0, 1.0));
+    float node = clamp(dot(n, v), 0.0, 1.0) * float(IBL_NODES) - 0.5;
+    int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);
+    vec3 albedo = mix(u_ibl_albedo[k0], u_ibl_albedo[k1], clamp(node - float(k0), 0.0, 1.0));
     vec3 r = reflect(-v, n);
     float level = sqrt(u_ibl_alpha) * float(IBL_LEVELS - 1);
     vec3 prefiltered = textureLod(u_ibl_radiance, equirect_uv(u_ibl_env_from_world * r), level).rgb;
-    return diffuse + albedo * prefiltered;
+    return seen_diffuse * diffuse + seen_specular * albedo * prefiltered;
 }
 #endif
 
@@ -92,7 +97,7 @@ vec3 direct_lighting(vec3 x, mat3 frame, vec3 wo) {
     }
 #endif
 #if ENV_IBL
-    sum += image_based_lighting(n, frame * wo);
+    sum += image_based_lighting(x, frame, wo);
 #endif
     return sum;
 }
