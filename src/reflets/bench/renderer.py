@@ -105,8 +105,9 @@ def _showcase(size, frames: int, one_shot_every: int) -> tuple[dict, list[str]]:
     return result, lines
 
 
-def showcase_scene(size, meshes=None, lights=None):
-    """The showcase at ``size``, optionally with only the named meshes and the lights of the given types."""
+def showcase_scene(size, meshes=None, lights=None, shadows: bool = True):
+    """The showcase at ``size``, optionally with only the named meshes and the lights of the given types (and
+    with every light's shadows off: an object then looks the same alone as among the others)."""
     scene = load_scene(scene_path("60_showcase.toml"))
     data = scene.model_dump(exclude={"base_dir"}, exclude_none=True)
     data["camera"]["size"] = list(size)
@@ -114,6 +115,8 @@ def showcase_scene(size, meshes=None, lights=None):
         data["mesh"] = [m for m in data["mesh"] if m["name"] in meshes]
     if lights is not None:
         data["light"] = [light for light in data["light"] if light["type"] in lights]
+    for light in data["light"]:
+        light["shadows"] = light.get("shadows", True) and shadows
     return load_dict(data, base_dir=scene.base_dir)
 
 
