@@ -2,7 +2,7 @@
 
 from .context import get_context, gl_info, is_software
 from .programs import ProgramSpec, get_program, set_uniforms
-from .targets import HDRTarget, TargetCache, release_objects
+from .targets import GLObjects, HDRTarget, TargetCache, release_objects
 from .timing import FrameTimer
 
 __all__ = [
@@ -14,6 +14,7 @@ __all__ = [
     "set_uniforms",
     "HDRTarget",
     "TargetCache",
+    "GLObjects",
     "release_objects",
     "FrameTimer",
 ]

@@ -35,6 +35,22 @@ class HDRTarget:
         release_objects(self.ctx, [self.fbo, self.color, self.depth])
 
 
+class GLObjects:
+    """The GL objects one component made, released together (``own`` returns what it is given)."""
+
+    def __init__(self, ctx):
+        self.ctx = ctx
+        self.objects: list = []
+
+    def own(self, obj):
+        self.objects.append(obj)
+        return obj
+
+    def release(self) -> None:
+        release_objects(self.ctx, self.objects)
+        self.objects = []
+
+
 def release_objects(ctx, objects: list) -> None:
     """Release GL objects, the default framebuffer bound first: moderngl restores the last bound framebuffer
     when it creates the next one, and a deleted one there raises GL_INVALID_OPERATION."""

@@ -27,7 +27,7 @@ import moderngl
 import numpy as np
 
 from ..equirect import equirect_direction, rotation_y
-from ..gpu import ProgramSpec, get_program, release_objects, set_uniforms
+from ..gpu import GLObjects, ProgramSpec, get_program, set_uniforms
 
 _SHADERS = "reflets/techniques/shaders/"
 PREFILTER_PROGRAM = ProgramSpec("ibl_prefilter", compute=_SHADERS + "ibl_prefilter.comp")
@@ -110,7 +110,8 @@ class PrefilteredEnvironment:
 
     def __init__(self, ctx, image: np.ndarray, light):
         self.ctx = ctx
-        self._objects: list = []
+        self._gl = GLObjects(ctx)
+        self._own = self._gl.own
         self.env_from_world = rotation_y(light.rotate_y).astype(np.float32).tobytes()  # R^T, column-major
         source = ctx.texture((image.shape[1], image.shape[0]), 3, np.ascontiguousarray(image).tobytes(), dtype="f4")
         self._own(source)
@@ -169,10 +170,5 @@ class PrefilteredEnvironment:
         self.radiance.use(IBL_UNITS[0])
         self.irradiance.use(IBL_UNITS[1])
 
-    def _own(self, obj):
-        self._objects.append(obj)
-        return obj
-
     def release(self) -> None:
-        release_objects(self.ctx, self._objects)
-        self._objects = []
+        self._gl.release()

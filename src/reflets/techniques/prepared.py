@@ -14,7 +14,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from ..gpu import ProgramSpec, get_program, release_objects
+from ..gpu import GLObjects, ProgramSpec, get_program
 from ..scene.environment import load_environment
 from ..scene.geometry import bounding_sphere, mesh_data
 from ..scene.lightmask import load_masks, quad_uv
@@ -37,7 +37,8 @@ class PreparedScene:
     def __init__(self, ctx, scene: Scene, shadow_settings: ShadowSettings = DEFAULT_SHADOWS):
         self.ctx = ctx
         self.scene = scene
-        self._objects: list = []
+        self._gl = GLObjects(ctx)
+        self._own = self._gl.own
         self._mesh_buffers: dict[int, tuple] = {}  # mesh index → (vbo, ibo), uploaded when a pass first draws it
         #: world-space triangles of every mesh (the content-keyed cache's objects: read-only)
         self.meshes: list[MeshData] = [mesh_data(scene, i) for i in range(len(scene.mesh))]
@@ -113,17 +114,12 @@ class PreparedScene:
             self._own(texture)
         return program, vao, light, texture
 
-    def _own(self, obj):
-        self._objects.append(obj)
-        return obj
-
     def release(self) -> None:
         self.shadows.release()
         if self._ibl is not None:
             self._ibl.release()
             self._ibl = None
-        release_objects(self.ctx, self._objects)
-        self._objects = []
+        self._gl.release()
         self._mesh_buffers = {}
 
 

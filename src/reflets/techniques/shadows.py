@@ -43,7 +43,7 @@ import moderngl
 import numpy as np
 
 from ..equirect import equirect_direction, rotation_y
-from ..gpu import ProgramSpec, get_program, release_objects, set_uniforms
+from ..gpu import GLObjects, ProgramSpec, get_program, set_uniforms
 from ..scene.emitters import area_light_samples, polygon_normal
 from ..scene.lightmask import mask_lookup
 from ..scene.model import DirectionalLight, EnvironmentLight, PointLight, PolygonLight, QuadLight, Scene
@@ -141,7 +141,8 @@ class ShadowMaps:
                 continue
             self._first_view[index] = first
         self.view_count = len(views)
-        self._objects: list = []
+        self._gl = GLObjects(ctx)
+        self._own = self._gl.own
         self.atlas = None
         self.buffer = None
         if not views:
@@ -227,13 +228,8 @@ class ShadowMaps:
         ctx.polygon_offset = 0.0, 0.0
         ctx.disable(ctx.DEPTH_TEST)
 
-    def _own(self, obj):
-        self._objects.append(obj)
-        return obj
-
     def release(self) -> None:
-        release_objects(self.ctx, self._objects)
-        self._objects = []
+        self._gl.release()
         self.atlas = self.buffer = None
 
 

@@ -11,7 +11,7 @@ import moderngl
 import numpy as np
 
 from ..errors import ArgumentError
-from ..gpu import ProgramSpec, get_program, release_objects, set_uniforms
+from ..gpu import GLObjects, ProgramSpec, get_program, set_uniforms
 from ..gpu.programs import shared_constants
 from ..scene.geometry import bounding_sphere
 from ..scene.model import DirectionalLight, Scene
@@ -72,7 +72,8 @@ class TranslucentShading(MaterialShading):
         self.scene = scene
         self.params = params
         self._light = scene.light[0]
-        self._objects: list = []
+        self._gl = GLObjects(prepared.ctx)
+        self._own = self._gl.own
         self._screen: dict = {}
         self._tables: list[dict] = []  # the texture tables handed to the pass (screen maps replaced in place)
         meshes = prepared.meshes
@@ -103,10 +104,6 @@ class TranslucentShading(MaterialShading):
 
     def _is_translucent(self, mesh) -> bool:
         return isinstance(self.scene.materials[mesh.material], Translucent)
-
-    def _own(self, obj):
-        self._objects.append(obj)
-        return obj
 
     def _light_camera(self, points: np.ndarray) -> tuple[np.ndarray, float]:
         """View-projection of the light view enclosing the scene, and the shadow-test tolerance (scene units)."""
@@ -263,8 +260,7 @@ class TranslucentShading(MaterialShading):
         ctx.disable(ctx.DEPTH_TEST)
 
     def release(self) -> None:
-        release_objects(self.ctx, self._objects)
-        self._objects = []
+        self._gl.release()
         self._screen = {}
         self._tables = []
 
