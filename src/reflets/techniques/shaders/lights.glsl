@@ -21,15 +21,18 @@ uniform float u_ibl_alpha;             // its main lobe's GGX-equivalent roughne
 
 vec3 image_based_lighting(vec3 x, mat3 frame, vec3 wo) {
     vec3 n = frame[2], v = frame * wo;
-    vec3 seen_diffuse = vec3(1.0), seen_specular = vec3(1.0);
-#if ENV_VIEWS > 0 && SHADOW_VIEWS > 0
-    environment_visibility(x, frame, wo, seen_diffuse, seen_specular);  // the scene's occlusion (shadows.glsl)
-#endif
     vec3 diffuse = u_ibl_diffuse * INV_PI * texture(u_ibl_irradiance, equirect_uv(u_ibl_env_from_world * n)).rgb;
     float node = clamp(dot(n, v), 0.0, 1.0) * float(IBL_NODES) - 0.5;
     int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);
     vec3 albedo = mix(u_ibl_albedo[k0], u_ibl_albedo[k1], clamp(node - float(k0), 0.0, 1.0));
-    vec3 r = reflect(-v, n);
+    // the lobe's dominant direction, between r and n as roughness grows (Lagarde & de Rousiers 2014): the
+    // prefiltered lobe is centred on r (n = v = r), a rough BRDF lobe leans towards the normal
+    float smooth_ = 1.0 - u_ibl_alpha;
+    vec3 r = normalize(mix(n, reflect(-v, n), smooth_ * (sqrt(smooth_) + u_ibl_alpha)));
+    vec3 seen_diffuse = vec3(1.0), seen_specular = vec3(1.0);
+#if ENV_VIEWS > 0 && SHADOW_VIEWS > 0
+    environment_visibility(x, n, r, u_ibl_alpha, seen_diffuse, seen_specular);  // the scene's occlusion
+#endif
     float level = sqrt(u_ibl_alpha) * float(IBL_LEVELS - 1);
     vec3 prefiltered = textureLod(u_ibl_radiance, equirect_uv(u_ibl_env_from_world * r), level).rgb;
     return seen_diffuse * diffuse + seen_specular * albedo * prefiltered;

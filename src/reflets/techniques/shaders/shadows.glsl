@@ -181,13 +181,14 @@ float soft_visibility(float code, vec3 x, mat3 frame, vec3 wo) {
     return den > 0.0 ? num / den : 1.0;
 }
 // The environment's occlusion (ENV_VIEWS views from u_env_first_view: directions d_k drawn ∝ the map's power,
-// weighted per channel): the visible fraction of the cosine-weighted light (`diffuse`) and of the BRDF-weighted
-// light (`specular`; the diffuse fraction where the lobe misses every direction), per channel.
+// weighted per channel): the visible fraction of the cosine-weighted light (`diffuse`) and of the light in the
+// specular lobe (`specular`: a Phong lobe about the dominant direction r of the prefiltered lobe's width — the
+// GGX α's — in place of the BRDF, which would cost an evaluation per direction; the diffuse fraction where the
+// lobe misses every direction), per channel; one bilinear comparison per direction (the sum filters).
 #if ENV_VIEWS > 0
 uniform int u_env_first_view;
-void environment_visibility(vec3 x, mat3 frame, vec3 wo, out vec3 diffuse, out vec3 specular) {
-    vec3 n = frame[2];
-    mat3 to_local = transpose(frame);
+void environment_visibility(vec3 x, vec3 n, vec3 r, float alpha, out vec3 diffuse, out vec3 specular) {
+    float exponent = 0.5 / max(alpha * alpha, 1e-4) - 0.5;  // Blinn-Phong 2/α² − 2, a quarter about r
     vec3 num_d = vec3(0.0), den_d = vec3(0.0), num_s = vec3(0.0), den_s = vec3(0.0);
     for (int k = 0; k < ENV_VIEWS; ++k) {
         int view = u_env_first_view + k;
@@ -195,12 +196,12 @@ void environment_visibility(vec3 x, mat3 frame, vec3 wo, out vec3 diffuse, out v
         float cos_x = dot(n, d);
         if (cos_x <= 0.0) continue;
         vec3 w = shadow_data[SHADOW_RECORD * view + 7].rgb * cos_x;
-        vec3 f = brdf_eval(wo, to_local * d);
-        float v = shadow_lookup(view, normal_offset(x, n, d, shadow_data[SHADOW_RECORD * view + 5].x));
+        float lobe = pow(max(dot(r, d), 0.0), exponent);
+        float v = shadow_tap(view, normal_offset(x, n, d, shadow_data[SHADOW_RECORD * view + 5].x));
         num_d += w * v;
         den_d += w;
-        num_s += w * f * v;
-        den_s += w * f;
+        num_s += w * (lobe * v);
+        den_s += w * lobe;
     }
     diffuse = mix(vec3(1.0), num_d / max(den_d, vec3(1e-30)), greaterThan(den_d, vec3(0.0)));
     specular = mix(diffuse, num_s / max(den_s, vec3(1e-30)), greaterThan(den_s, 1e-12 * den_d));
