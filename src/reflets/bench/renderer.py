@@ -173,7 +173,7 @@ def _objects(size, spp: int, reference_spp: int, volumetric_spp: int, out_dir) -
     for light, models in (
         ("point", (("translucent technique (what auto draws)", "auto"), ("far-field BRDF", "forward"))),
         ("quad", (("far-field BRDF by LTC (what auto draws)", "auto"),)),
-        ("environment", (("far-field BRDF, environment grid (what auto draws)", "auto"),)),
+        ("environment", (("far-field BRDF, prefiltered environment (what auto draws)", "auto"),)),
     ):
         marble = showcase_scene(size, meshes={"marble"}, lights={light})
         kind = "" if light == "point" else f"{light}_"

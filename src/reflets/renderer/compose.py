@@ -58,7 +58,8 @@ LIGHT_KINDS = ("point", "directional", "quad", "polygon", "environment")
 
 
 class AutoParams(TechniqueParams):
-    """Parameters of ``auto`` (``area_samples`` and ``env_grid`` go to every pass, as in ``forward``)."""
+    """Parameters of ``auto`` (``area_samples``, ``env_grid`` and ``environment`` go to every pass, as in
+    ``forward``; the shadow settings to the prepared scene they share)."""
 
     area_method: Literal["ltc", "forward", "brute", "adaptive", "biased", "analytic", "mc"] = Field(
         "ltc", description="how BRDF-library materials (and translucent ones' far field) take quad / polygon lights"
@@ -123,24 +124,25 @@ def _with_lights(scene: Scene, lights: list) -> Scene:
 def evaluation_table(area_method: str = "ltc") -> list[tuple[str, str, str]]:
     """(material, light, how ``auto`` evaluates it) for every pair — printed by ``reflets info``."""
     area = f"{area_method} (exact polygon integral of the BRDF's LTC)" if area_method == "ltc" else area_method
+    area += " × the soft-shadow ratio"
     rows = []
     for material in ("BRDF library", "translucent", "scratched", "mirror reflector"):
         for light in LIGHT_KINDS:
             delta = light in ("point", "directional")
             if material == "BRDF library":
                 how = (
-                    "exact"
+                    "exact, shadow maps with PCF"
                     if delta
                     else area
                     if light != "environment"
-                    else "grid of distant lights (env_grid), integrating the map exactly"
+                    else "prefiltered image-based lighting (the material's own split sum), occluded by 32 shadow views"
                 )
             elif material == "translucent":
                 how = (
                     "single + multiple scattering through the light's own light view"
                     if delta
                     else "far-field BRDF (glossy interface + total diffuse reflectance): "
-                    + ("area method" if light != "environment" else "environment grid")
+                    + ("area method" if light != "environment" else "prefiltered image-based lighting")
                 )
             elif material == "scratched":
                 how = (
@@ -156,7 +158,7 @@ def evaluation_table(area_method: str = "ltc") -> list[tuple[str, str, str]]:
                     if delta
                     else "Fermat reflection of the emitter and the meshes it lights; diffuse part by midpoint samples"
                     if light != "environment"
-                    else "background along the mirror direction; diffuse part by the environment grid"
+                    else "background along the mirror direction; diffuse part by prefiltered image-based lighting"
                 )
             rows.append((material, light, how))
     return rows
