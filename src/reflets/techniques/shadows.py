@@ -53,8 +53,12 @@ _SHADERS = "reflets/techniques/shaders/"
 DEPTH_PROGRAM = ProgramSpec("shadow_depth", vertex=_SHADERS + "mesh.vert", fragment=_SHADERS + "shadow_depth.frag")
 #: texture units of the atlas (depth comparisons; raw depths for PCSS) and storage binding of the views in every
 #: shading program
-SHADOW_UNIT, SHADOW_DEPTH_UNIT = 11, 10
-SHADOW_SAMPLERS = {"u_shadow_atlas": SHADOW_UNIT, "u_shadow_depth": SHADOW_DEPTH_UNIT}
+SHADOW_UNIT, SHADOW_DEPTH_UNIT, SHADOW_NEAREST_UNIT = 11, 10, 16
+SHADOW_SAMPLERS = {
+    "u_shadow_atlas": SHADOW_UNIT,
+    "u_shadow_depth": SHADOW_DEPTH_UNIT,
+    "u_shadow_nearest": SHADOW_NEAREST_UNIT,
+}
 SHADOW_BINDING = 6
 #: pixels per side of one view (a point light's cube face, a directional light's map)
 RESOLUTION = 2048
@@ -157,6 +161,10 @@ class ShadowMaps:
         self.atlas.repeat_x = self.atlas.repeat_y = False
         self._raw = self._own(ctx.sampler(filter=(moderngl.NEAREST, moderngl.NEAREST), compare_func=""))
         self._raw.repeat_x = self._raw.repeat_y = False
+        # one comparison of the nearest texel (the environment's many directions: the sum over them filters,
+        # and a bilinear comparison costs four fetches on a software rasteriser)
+        self._nearest = self._own(ctx.sampler(filter=(moderngl.NEAREST, moderngl.NEAREST), compare_func="<="))
+        self._nearest.repeat_x = self._nearest.repeat_y = False
         records = []
         for k, view in enumerate(views):
             tile = ((k % columns) * self.resolution / size[0], (k // columns) * self.resolution / size[1])
@@ -207,6 +215,8 @@ class ShadowMaps:
             self.atlas.use(SHADOW_UNIT)
             self.atlas.use(SHADOW_DEPTH_UNIT)
             self._raw.use(SHADOW_DEPTH_UNIT)  # that unit reads raw depths (no comparison)
+            self.atlas.use(SHADOW_NEAREST_UNIT)
+            self._nearest.use(SHADOW_NEAREST_UNIT)
             self.buffer.bind_to_storage_buffer(SHADOW_BINDING)
 
     def _draw(self, meshes_vertex_array, views: list[np.ndarray], columns: int, size: tuple[int, int]) -> None:

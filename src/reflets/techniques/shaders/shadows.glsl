@@ -9,6 +9,7 @@ const int SHADOW_RECORD = 8;  // vec4 per view: mat4, tile, (texel), (sample poi
 layout(std430, binding = 6) readonly buffer ShadowViews { vec4 shadow_data[]; };
 uniform sampler2DShadow u_shadow_atlas;
 uniform sampler2D u_shadow_depth;  // the same atlas, raw depths (PCSS's blocker search)
+uniform sampler2DShadow u_shadow_nearest;  // the same atlas, one comparison of the nearest texel
 
 // x in view `view`'s map: the atlas uv and depth; false outside what the map holds.
 bool shadow_coords(int view, vec3 x, out vec2 uv, out float depth, out vec4 tile) {
@@ -184,7 +185,7 @@ float soft_visibility(float code, vec3 x, mat3 frame, vec3 wo) {
 // weighted per channel): the visible fraction of the cosine-weighted light (`diffuse`) and of the light in the
 // specular lobe (`specular`: a Phong lobe about the dominant direction r of the prefiltered lobe's width — the
 // GGX α's — in place of the BRDF, which would cost an evaluation per direction; the diffuse fraction where the
-// lobe misses every direction), per channel; one bilinear comparison per direction (the sum filters).
+// lobe misses every direction), per channel; one nearest-texel comparison per direction (the sum filters).
 #if ENV_VIEWS > 0
 uniform int u_env_first_view;
 void environment_visibility(vec3 x, vec3 n, vec3 r, float alpha, out vec3 diffuse, out vec3 specular) {
@@ -197,7 +198,11 @@ void environment_visibility(vec3 x, vec3 n, vec3 r, float alpha, out vec3 diffus
         if (cos_x <= 0.0) continue;
         vec3 w = shadow_data[SHADOW_RECORD * view + 7].rgb * cos_x;
         float lobe = pow(max(dot(r, d), 0.0), exponent);
-        float v = shadow_tap(view, normal_offset(x, n, d, shadow_data[SHADOW_RECORD * view + 5].x));
+        vec2 uv;
+        float depth;
+        vec4 tile;
+        vec3 p = normal_offset(x, n, d, shadow_data[SHADOW_RECORD * view + 5].x);
+        float v = shadow_coords(view, p, uv, depth, tile) ? texture(u_shadow_nearest, vec3(uv, depth)) : 1.0;
         num_d += w * v;
         den_d += w;
         num_s += w * (lobe * v);
