@@ -20,6 +20,12 @@ def equirect_direction(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.stack([np.sin(theta) * np.sin(phi), np.cos(theta), -np.sin(theta) * np.cos(phi)], axis=-1)
 
 
+def row_solid_angles(height: int, width: int) -> np.ndarray:
+    """Solid angle of one pixel of each row of a height × width map: Δφ (cos θ_top − cos θ_bottom)."""
+    theta = np.linspace(0.0, np.pi, height + 1)
+    return (2.0 * np.pi / width) * (np.cos(theta[:-1]) - np.cos(theta[1:]))
+
+
 def equirect_uv(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(u, v) of directions in the environment's frame (Mitsuba 3 layout; same as ``equirect_uv`` in GLSL)."""
     u = np.arctan2(d[..., 0], -d[..., 2]) / (2.0 * np.pi)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..equirect import equirect_direction, equirect_uv, rotation_y
+from ..equirect import equirect_direction, equirect_uv, rotation_y, row_solid_angles
 from ..errors import ImageError, SceneError
 from .model import EnvironmentLight, Scene
 
@@ -35,9 +35,7 @@ def environment_grid(image: np.ndarray, light: EnvironmentLight, grid: tuple[int
     """
     h, w, _ = image.shape
     nu, nv = grid
-    # Pixel solid angles: Δφ (cos θ0 − cos θ1).
-    theta_edges = np.linspace(0.0, np.pi, h + 1)
-    pix_omega = (2.0 * np.pi / w) * (np.cos(theta_edges[:-1]) - np.cos(theta_edges[1:]))
+    pix_omega = row_solid_angles(h, w)
     weighted = image.astype(np.float64) * pix_omega[:, None, None]
     row_of = np.minimum((np.arange(h) * nv) // h, nv - 1)
     col_of = np.minimum((np.arange(w) * nu) // w, nu - 1)

@@ -198,8 +198,9 @@ class Forward(Technique):
         self._background = get_program(ctx, BACKGROUND_PROGRAM)
         self._background_vao = ctx.vertex_array(self._background, [])
         self._objects.append(self._background_vao)
-        self._bounds = self.prepared.bounds
-        self._near, self._far = clip_planes_of_sphere(np.asarray(scene.camera.position, np.float64), *self._bounds)
+        self._near, self._far = clip_planes_of_sphere(
+            np.asarray(scene.camera.position, np.float64), *self.prepared.bounds
+        )
         self.timer = FrameTimer(ctx)
 
     def _mesh_draw(self, index: int, material) -> tuple:
@@ -346,7 +347,7 @@ class Forward(Technique):
     def set_camera(self, camera) -> bool:
         """Move the camera without preparing again: only the clip planes depend on it."""
         self.scene = self.scene.model_copy(update={"camera": camera})
-        self._near, self._far = clip_planes_of_sphere(np.asarray(camera.position, np.float64), *self._bounds)
+        self._near, self._far = clip_planes_of_sphere(np.asarray(camera.position, np.float64), *self.prepared.bounds)
         return True
 
     def _draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:

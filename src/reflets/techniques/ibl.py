@@ -21,12 +21,16 @@ per material. What the approximation costs is measured by ``reflets bench ibl`` 
 
 from __future__ import annotations
 
+import functools
 import math
+import sys
+from pathlib import Path
 
 import moderngl
 import numpy as np
 
-from ..equirect import equirect_direction, rotation_y
+from ..cache import Cache, content_key, file_stamp, source_hash
+from ..equirect import equirect_direction, rotation_y, row_solid_angles
 from ..gpu import GLObjects, ProgramSpec, get_program, set_uniforms
 
 _SHADERS = "reflets/techniques/shaders/"
@@ -65,8 +69,7 @@ def irradiance_map(image: np.ndarray) -> np.ndarray:
     """E(n) = ∫ L(ω) max(0, n·ω) dω on an equirectangular grid of normals (the map's own frame), float32."""
     source = _downsample(image, SOURCE_SIZE)
     sh, sw = source.shape[:2]
-    theta_edges = np.linspace(0.0, np.pi, sh + 1)
-    omega = (2.0 * np.pi / sw) * (np.cos(theta_edges[:-1]) - np.cos(theta_edges[1:]))
+    omega = row_solid_angles(sh, sw)
     u, v = (np.arange(sw) + 0.5) / sw, (np.arange(sh) + 0.5) / sh
     dirs = equirect_direction(u[None, :], v[:, None]).reshape(-1, 3)
     power = (source * omega[:, None, None]).reshape(-1, 3)
@@ -105,25 +108,54 @@ def specular_albedo(material, nodes: int = ALBEDO_NODES, samples: int = ALBEDO_S
     return np.maximum(out - diffuse, 0.0)
 
 
+ALBEDOS = Cache("ibl", lambda path: np.load(path)["albedo"], lambda albedo, path: np.savez(path, albedo=albedo))
+
+
+def cached_specular_albedo(material) -> np.ndarray:
+    """``specular_albedo`` of a material through the cache (memory, then disk): a persistent renderer prepares
+    again on every edit, and a curve costs 15–120 ms of NumPy per material. Keyed by the material, the sample
+    counts and the source of its model, of the BRDF base and of this module (a measured table: its file stamp)."""
+    module = sys.modules[type(material).__module__].__file__
+    data = {
+        "material": material.model_dump(mode="json"),
+        "nodes": ALBEDO_NODES,
+        "samples": ALBEDO_SAMPLES,
+        "code": _source_hash(module),
+    }
+    if getattr(material, "type", None) == "measured":
+        data["file_stat"] = file_stamp(material.file)
+    return ALBEDOS.get("albedo-" + content_key(data), lambda: specular_albedo(material))
+
+
+@functools.cache
+def _source_hash(module: str) -> str:
+    from ..brdf import base
+
+    return source_hash(Path(module), Path(base.__file__), Path(__file__))
+
+
 class PrefilteredEnvironment:
     """The prefiltered radiance and irradiance maps of one environment on one context (module docstring)."""
 
-    def __init__(self, ctx, image: np.ndarray, light):
-        self.ctx = ctx
+    def __init__(self, source, image: np.ndarray, light):
+        """``source``: the map's texture (the prepared scene's; its mips are built here, its own filter is left
+        as it is), ``image`` the same map in memory."""
+        ctx = self.ctx = source.ctx
         self._gl = GLObjects(ctx)
         self._own = self._gl.own
         self.env_from_world = rotation_y(light.rotate_y).astype(np.float32).tobytes()  # R^T, column-major
-        source = ctx.texture((image.shape[1], image.shape[0]), 3, np.ascontiguousarray(image).tobytes(), dtype="f4")
-        self._own(source)
-        source.repeat_x, source.repeat_y = True, False
         source.build_mipmaps()
-        source.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+        # the prefiltering reads the source's mips through a sampler of its own (the background and the scratch
+        # lobes keep reading level 0 through the texture's filter)
+        mips = self._own(ctx.sampler(filter=(moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)))
+        mips.repeat_x, mips.repeat_y = True, False
         w, h = PREFILTER_SIZE
         self.radiance = self._own(ctx.texture((w, h), 4, dtype="f4"))
         self.radiance.build_mipmaps(0, LEVELS - 1)  # allocates levels 0 … LEVELS − 1
         self.radiance.repeat_x, self.radiance.repeat_y = True, False
         program = get_program(ctx, PREFILTER_PROGRAM)
         source.use(0)
+        mips.use(0)
         texel_omega = 4.0 * math.pi / (image.shape[0] * image.shape[1])
         for level in range(LEVELS):
             lw, lh = max(1, w >> level), max(1, h >> level)
@@ -142,23 +174,20 @@ class PrefilteredEnvironment:
             )
             program.run(group_x=-(-lw // 8), group_y=-(-lh // 8))
         ctx.memory_barrier()
+        mips.clear(0)
         self.radiance.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         irradiance = irradiance_map(image)
         self.irradiance = self._own(ctx.texture(IRRADIANCE_SIZE, 3, irradiance.tobytes(), dtype="f4"))
         self.irradiance.repeat_x, self.irradiance.repeat_y = True, False
         self.irradiance.filter = (moderngl.LINEAR, moderngl.LINEAR)
-        self._albedo: dict[str, bytes] = {}
 
     def flags(self) -> dict[str, int]:
         return {"ENV_IBL": 1, "IBL_LEVELS": LEVELS, "IBL_NODES": ALBEDO_NODES}
 
     def uniforms(self, material) -> dict[str, object]:
-        """The material's split-sum inputs (its albedo curve computed once per material)."""
-        key = material.model_dump_json()
-        if key not in self._albedo:
-            self._albedo[key] = specular_albedo(material).astype(np.float32).tobytes()
+        """The material's split-sum inputs (its albedo curve from the cache: computed once per material)."""
         return {
-            "u_ibl_albedo": self._albedo[key],
+            "u_ibl_albedo": cached_specular_albedo(material).astype(np.float32).tobytes(),
             "u_ibl_diffuse": tuple(float(c) for c in material.lambertian_split()[0]),
             "u_ibl_alpha": equivalent_alpha(material),
             "u_ibl_env_from_world": self.env_from_world,

@@ -21,7 +21,7 @@ from ..scene.lightmask import load_masks, quad_uv
 from ..scene.meshdata import MeshData
 from ..scene.model import PolygonLight, QuadLight, Scene
 from .ibl import PrefilteredEnvironment
-from .shadows import DEFAULT_SHADOWS, ShadowMaps, ShadowSettings
+from .shadows import DEFAULT_SHADOWS, ShadowMaps, ShadowSettings, light_index
 
 _SHADERS = "reflets/techniques/shaders/"
 EMITTER_PROGRAM = ProgramSpec(
@@ -56,27 +56,19 @@ class PreparedScene:
         all_points = np.concatenate(points) if points else np.zeros((0, 3))
         #: (centre, radius) of every mesh vertex and emitter corner, (None, 0) for an empty scene: the clip planes
         self.bounds = bounding_sphere(all_points) if len(all_points) else (None, 0.0)
-        #: the lights' shadow maps (every mesh casts)
         self._ibl = None
-        self.shadows = ShadowMaps(
-            ctx, scene, self.meshes, self._every_mesh, self.mask_of, shadow_settings, self.environment
-        )
+        #: the lights' shadow maps (every mesh casts)
+        self.shadows = ShadowMaps(self, shadow_settings)
 
     def prefiltered_environment(self) -> PrefilteredEnvironment:
         """The environment's prefiltered maps, made when a pass first asks (the GPU prefiltering runs once)."""
         if self._ibl is None:
-            self._ibl = PrefilteredEnvironment(self.ctx, self.environment, self.scene.environment)
+            self._ibl = PrefilteredEnvironment(self.environment_texture, self.environment, self.scene.environment)
         return self._ibl
 
-    def _every_mesh(self, program) -> list:
-        return [self.vertex_array(program, i) for i in range(len(self.meshes))]
-
     def mask_of(self, light) -> np.ndarray | None:
-        """The mask of a light of this scene (a pass's scene may hold a subset of the lights: found by identity)."""
-        for index, candidate in enumerate(self.scene.light):
-            if candidate is light:
-                return self._masks.get(index)
-        return None
+        """The mask of a light of this scene (a pass's scene may hold a subset of the lights)."""
+        return self._masks.get(light_index(self.scene, light))
 
     def vertex_array(self, program, mesh: int | MeshData):
         """A vertex array binding mesh ``mesh`` (an index: the shared buffers; or any ``MeshData``, e.g. a

@@ -42,10 +42,11 @@ from typing import Literal
 import moderngl
 import numpy as np
 
-from ..equirect import equirect_direction, rotation_y
+from ..equirect import equirect_direction, rotation_y, row_solid_angles
 from ..gpu import GLObjects, ProgramSpec, get_program, set_uniforms
 from ..scene.emitters import area_light_samples, polygon_normal
-from ..scene.lightmask import mask_lookup
+from ..scene.geometry import bounding_sphere
+from ..scene.lightmask import LUMINANCE, mask_lookup
 from ..scene.model import DirectionalLight, EnvironmentLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
 
@@ -74,8 +75,6 @@ SOFT_SIDE = 4
 #: a direction drawn k times is one view of weight k), one orthographic view each; the environment's light is
 #: weighted by the visible fraction of them (a sun gets its own exact direction: its shadow lands in place)
 ENV_SAMPLES = 32
-#: soft-shadow designs: the ratio estimator over sample views, or PCSS from one view at the emitter's centre
-SOFT_DESIGNS = ("ratio", "pcss")
 
 
 @dataclass(frozen=True)
@@ -103,42 +102,40 @@ CUBE_FACES = (
 class ShadowMaps:
     """The shadow views of a scene's lights, drawn into one depth atlas (see the module docstring)."""
 
-    def __init__(
-        self, ctx, scene: Scene, meshes, meshes_vertex_array, mask_of, settings=DEFAULT_SHADOWS, environment=None
-    ):
-        """``meshes``: the scene's ``MeshData`` (world space); ``meshes_vertex_array(program)``: vertex arrays of
-        every mesh for a program (the prepared scene's); ``mask_of(light)``: a quad light's mask or None;
-        ``environment``: the environment map (H, W, 3) or None."""
-        self.ctx = ctx
-        self.scene = scene
+    def __init__(self, prepared, settings: ShadowSettings = DEFAULT_SHADOWS):
+        """The views of a ``PreparedScene``'s lights (its meshes cast; its environment map, if any, is sampled;
+        not imported here: the prepared scene imports this module)."""
+        ctx = self.ctx = prepared.ctx
+        scene = self.scene = prepared.scene
         self.settings = settings
         self._first_view: dict[int, int] = {}  # light index → its first view
         self._soft: dict[int, tuple[int, int, int]] = {}  # area light index → (first view, points, views per point)
         #: the environment's occlusion views: (first view, count), or None
         self.environment_views: tuple[int, int] | None = None
         views: list[dict] = []
-        boxes = np.array([[m.positions.min(axis=0), m.positions.max(axis=0)] for m in meshes if len(m.positions)])
-        if len(boxes):
-            corners = np.array([[box[(k >> a) & 1, a] for a in range(3)] for box in boxes for k in range(8)])
-            centre, radius = bounding_sphere_of(corners)
+        boxes = [(m.positions.min(axis=0), m.positions.max(axis=0)) for m in prepared.meshes if len(m.positions)]
+        if boxes:  # the meshes' bounding-box corners: what the views must hold
+            corners = np.array([[box[(k >> a) & 1][a] for a in range(3)] for box in boxes for k in range(8)])
+            centre, radius = bounding_sphere(corners)
+            radius = max(radius, 1e-6)
         for index, light in enumerate(scene.light):
-            if not getattr(light, "shadows", False) or not len(boxes):
+            if not getattr(light, "shadows", False) or not boxes:
                 continue
             first = len(views)
             if isinstance(light, PointLight):
                 views += _cube_views(np.asarray(light.position, np.float64), centre, radius)
             elif isinstance(light, DirectionalLight):
-                views.append(_directional_view(np.asarray(light.direction, np.float64), centre, radius))
+                views.append(directional_view(np.asarray(light.direction, np.float64), centre, radius))
             elif isinstance(light, QuadLight | PolygonLight):
-                points, weights = _soft_samples(light, mask_of(light), settings)
+                points, weights = _soft_samples(light, prepared.mask_of(light), settings)
                 normal = polygon_normal(light.polygon())
                 axes = (normal, -normal) if light.two_sided else (normal,)
                 for y, w in zip(points, weights, strict=True):
                     views += [_sample_view(y, axis, w, corners) for axis in axes]
                 self._soft[index] = (first, len(points), len(axes))
-            elif isinstance(light, EnvironmentLight) and environment is not None:
-                for d, w, rgb in zip(*environment_directions(environment, light), strict=True):
-                    view = _directional_view(-d, centre, radius)
+            elif isinstance(light, EnvironmentLight) and prepared.environment is not None:
+                for d, w, rgb in zip(*environment_directions(prepared.environment, light), strict=True):
+                    view = directional_view(-d, centre, radius)
                     views.append({**view, "point": tuple(d), "weight": float(w), "axis": tuple(rgb)})
                 self.environment_views = (first, len(views) - first)
             else:
@@ -181,14 +178,11 @@ class ShadowMaps:
                 )
             )
         self.buffer = self._own(ctx.buffer(np.asarray(records, np.float32).tobytes()))
-        self._draw(meshes_vertex_array, [v["view_proj"] for v in views], columns, size)
+        self._draw(prepared, [v["view_proj"] for v in views], columns, size)
 
     def soft_range(self, light) -> tuple[int, int, int] | None:
         """(first view, sample points, views per point) of an area light of this scene, or None (no shadows)."""
-        for index, candidate in enumerate(self.scene.light):
-            if candidate is light:
-                return self._soft.get(index)
-        return None
+        return self._soft.get(light_index(self.scene, light))
 
     def soft_code(self, light) -> float:
         """An area light's views as shadows.glsl's ``soft_visibility`` reads them: (first + 1) × 256 + points × 4
@@ -201,12 +195,8 @@ class ShadowMaps:
         return float((first + 1) * 256 + points * 4 + pcss * 2 + per_point - 1)
 
     def view_index(self, light) -> int:
-        """The first view of a light of this scene (found by identity: a pass's scene holds some of the lights),
-        or −1 when it casts no shadow."""
-        for index, candidate in enumerate(self.scene.light):
-            if candidate is light:
-                return self._first_view.get(index, -1)
-        return -1
+        """The first view of a light of this scene, or −1 when it casts no shadow."""
+        return self._first_view.get(light_index(self.scene, light), -1)
 
     def bind(self) -> None:
         """Bind the atlas and the views where the shading programs read them (a program without shadows
@@ -219,10 +209,10 @@ class ShadowMaps:
             self._nearest.use(SHADOW_NEAREST_UNIT)
             self.buffer.bind_to_storage_buffer(SHADOW_BINDING)
 
-    def _draw(self, meshes_vertex_array, views: list[np.ndarray], columns: int, size: tuple[int, int]) -> None:
+    def _draw(self, prepared, views: list[np.ndarray], columns: int, size: tuple[int, int]) -> None:
         ctx = self.ctx
         program = get_program(ctx, DEPTH_PROGRAM)
-        vaos = [self._own(vao) for vao in meshes_vertex_array(program)]
+        vaos = [self._own(prepared.vertex_array(program, i)) for i in range(len(prepared.meshes))]
         fbo = self._own(ctx.framebuffer(depth_attachment=self.atlas))
         fbo.use()
         fbo.clear(depth=1.0)
@@ -243,10 +233,10 @@ class ShadowMaps:
         self.atlas = self.buffer = None
 
 
-def bounding_sphere_of(points: np.ndarray) -> tuple[np.ndarray, float]:
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    centre = 0.5 * (lo + hi)
-    return centre, max(float(np.linalg.norm(hi - lo)) * 0.5, 1e-6)
+def light_index(scene: Scene, light) -> int | None:
+    """The index of ``light`` in ``scene.light``, found by identity: a pass's scene holds some of the full
+    scene's lights (the same objects), at other indices."""
+    return next((i for i, candidate in enumerate(scene.light) if candidate is light), None)
 
 
 def _cube_views(position: np.ndarray, centre: np.ndarray, radius: float) -> list[dict]:
@@ -261,8 +251,9 @@ def _cube_views(position: np.ndarray, centre: np.ndarray, radius: float) -> list
     ]
 
 
-def _directional_view(direction: np.ndarray, centre: np.ndarray, radius: float) -> dict:
-    """An orthographic view along ``direction`` holding the meshes' bounding sphere."""
+def directional_view(direction: np.ndarray, centre: np.ndarray, radius: float) -> dict:
+    """An orthographic view along ``direction`` holding a bounding sphere: its view-projection and the world size
+    of its whole width (2 r; a texel is that over the resolution)."""
     d = direction / np.linalg.norm(direction)
     eye = centre - d * 2.0 * radius
     up = (0.0, 1.0, 0.0) if abs(d[1]) < 0.99 else (1.0, 0.0, 0.0)
@@ -277,9 +268,7 @@ def environment_directions(image: np.ndarray, light, count: int = ENV_SAMPLES) -
     centres), merged: (directions (K, 3), how many of the ``count`` samples each got, that × the pixel's colour
     over its luminance (K, 3): the sample's weight per channel, so that a yellow sun hidden leaves a blue sky)."""
     h, w, _ = image.shape
-    theta = np.linspace(0.0, np.pi, h + 1)
-    omega = (2.0 * np.pi / w) * (np.cos(theta[:-1]) - np.cos(theta[1:]))
-    power = (image.astype(np.float64) @ np.array([0.2126, 0.7152, 0.0722])) * omega[:, None]
+    power = (image.astype(np.float64) @ LUMINANCE) * row_solid_angles(h, w)[:, None]
     cdf = np.cumsum(power.ravel())
     if cdf[-1] <= 0:
         return np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3))
@@ -288,7 +277,7 @@ def environment_directions(image: np.ndarray, light, count: int = ENV_SAMPLES) -
     rows, cols = np.divmod(pixels, w)
     local = equirect_direction((cols + 0.5) / w, (rows + 0.5) / h)
     rgb = image[rows, cols].astype(np.float64)
-    colour = rgb / np.maximum(rgb @ np.array([0.2126, 0.7152, 0.0722]), 1e-30)[:, None]
+    colour = rgb / np.maximum(rgb @ LUMINANCE, 1e-30)[:, None]
     return local @ rotation_y(light.rotate_y).T, counts.astype(np.float64), counts[:, None] * colour
 
 

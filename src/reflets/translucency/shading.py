@@ -19,6 +19,7 @@ from ..scene.transform import look_at, perspective
 from ..techniques.forward import LIGHT_FLAGS
 from ..techniques.prepared import PreparedScene
 from ..techniques.shading import MaterialShading
+from ..techniques.shadows import directional_view
 from . import rings as rings_module
 from .material import Translucent
 from .optics import diffuse_normalisation
@@ -110,16 +111,9 @@ class TranslucentShading(MaterialShading):
         center, radius = bounding_sphere(points)
         radius = max(radius, 1e-6)
         texel = 2.0 * radius / self.params.light_map
-        if isinstance(self._light, DirectionalLight):
-            d = -np.asarray(self._light.direction, dtype=np.float64)
-            d /= np.linalg.norm(d)
-            eye = center + d * 2.0 * radius
-            up = (0.0, 1.0, 0.0) if abs(d[1]) < 0.99 else (1.0, 0.0, 0.0)
-            view = look_at(eye, center, up)
-            near, far = 0.5 * radius, 3.5 * radius
-            proj = np.diag([1.0 / radius, 1.0 / radius, -2.0 / (far - near), 1.0])
-            proj[2, 3] = -(far + near) / (far - near)
-            return proj @ view, 4.0 * texel
+        if isinstance(self._light, DirectionalLight):  # the shadow maps' orthographic view
+            view = directional_view(np.asarray(self._light.direction, dtype=np.float64), center, radius)
+            return view["view_proj"], 4.0 * texel
         eye = np.asarray(self._light.position, dtype=np.float64)
         dist = np.linalg.norm(center - eye)
         if dist <= radius * 1.01:
