@@ -9,7 +9,7 @@ from reflets.errors import GLUnavailableError, ShaderError
 from reflets.gpu import HDRTarget, ProgramSpec, get_program
 from reflets.gpu import programs as programs_module
 from reflets.gpu.context import gl_choice
-from reflets.gpu.programs import assemble, map_log
+from reflets.gpu.programs import EXTENSIONS, GLSL_VERSION, assemble, map_log
 
 
 @pytest.fixture
@@ -29,7 +29,7 @@ def test_include_inlines_once_and_numbers_files(shader_files):
     shader_files["reflets/t/a.glsl"] = '#include "reflets/t/b.glsl"\n#include "reflets/t/b.glsl"\nvoid main() {}\n'
     shader_files["reflets/t/b.glsl"] = "float twice(float x) { return 2.0 * x; }\n"
     source, files = assemble("reflets/t/a.glsl", flags={"N_LIGHTS": 4, "USE_X": True, "OFF": False})
-    assert source.startswith("#version 430 core\n#define N_LIGHTS 4\n#define USE_X 1\n")
+    assert source.startswith(f"{GLSL_VERSION}\n{EXTENSIONS}\n#define N_LIGHTS 4\n#define USE_X 1\n")
     assert "OFF" not in source
     assert source.count("float twice") == 1
     assert files == ["reflets/gpu/shaders/common.glsl", "reflets/t/a.glsl", "reflets/t/b.glsl"]

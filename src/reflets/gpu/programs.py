@@ -22,6 +22,9 @@ from importlib import resources
 from ..errors import ShaderError
 
 GLSL_VERSION = "#version 430 core"
+#: fine derivatives (dFdxFine: a 2×2 quad's exact neighbours; core from GLSL 4.50): enabled where the driver has
+#: them, and shaders test ``GL_ARB_derivative_control`` before use
+EXTENSIONS = "#extension GL_ARB_derivative_control : enable"
 COMMON = "reflets/gpu/shaders/common.glsl"  # constants and frame helpers, in every stage
 _INCLUDE = re.compile(r'^\s*#include\s+(?:"([^"]+)"|([A-Za-z_]\w*))\s*$', re.MULTILINE)
 _MESA_LINE = re.compile(r"(?m)^(\d+):(\d+)\((\d+)\)")
@@ -118,7 +121,7 @@ def assemble(
     asm = _Assembler(dict(slots or {}))
     common = asm.expand(COMMON)
     body = asm.expand(name)
-    return "\n".join([GLSL_VERSION, *defines, common, body, ""]), asm.files
+    return "\n".join([GLSL_VERSION, EXTENSIONS, *defines, common, body, ""]), asm.files
 
 
 def map_log(log: str, files: list[str]) -> str:

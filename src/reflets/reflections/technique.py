@@ -293,6 +293,8 @@ class Fermat(Forward):
     def _reflector_draws(self, reflector: Reflector) -> list[tuple]:
         ctx = self.ctx
         solver = self._solver_flags(reflector)
+        # every environment lookup: the checkerboard needs the whole 2×2 quad alive, and this pass discards
+        light_flags = {**self._light_flags, "ENV_CHECKERBOARD": 0}
         draws = []
         for data, material in self._reflected_meshes:
             scratched = shading_for(material, [self._lobes]) is not None  # its lobes, as in direct view
@@ -303,7 +305,7 @@ class Fermat(Forward):
                 REFLECTED_EMITTER=0,
                 EMITTER_MASK=0,
                 SCRATCHED=int(scratched),
-                **self._light_flags,
+                **light_flags,
                 **material.flags(),
                 **(self._lobes.flags(material) if scratched else {}),
                 **solver,
@@ -325,7 +327,7 @@ class Fermat(Forward):
                 slots={"BRDF": "reflets/brdf/glsl/lambert.glsl"},  # compiled out: an emitter is not shaded
                 REFLECTED_EMITTER=1,
                 EMITTER_MASK=int(mask is not None),
-                **self._light_flags,
+                **light_flags,
                 **solver,
             )
             uniforms = {

@@ -42,6 +42,7 @@ from ..gpu import FrameTimer
 from ..scene.model import PolygonLight, QuadLight, Scene
 from ..techniques.base import Technique, TechniqueParams, get_technique, register_technique
 from ..techniques.forward import (
+    EnvironmentOcclusion,
     Forward,
     GridSide,
     PassRole,
@@ -58,7 +59,8 @@ LIGHT_KINDS = ("point", "directional", "quad", "polygon", "environment")
 
 
 class AutoParams(TechniqueParams):
-    """Parameters of ``auto`` (``area_samples``, ``env_grid`` and ``environment`` go to every pass, as in
+    """Parameters of ``auto`` (``area_samples``, ``env_grid``, ``environment`` and ``environment_occlusion`` go to
+    every pass, as in
     ``forward``; the shadow settings to the prepared scene they share)."""
 
     area_method: Literal["ltc", "forward", "brute", "adaptive", "biased", "analytic", "mc"] = Field(
@@ -70,6 +72,9 @@ class AutoParams(TechniqueParams):
     env_grid: tuple[GridSide, GridSide] = Field((32, 16), description="environment map as nu × nv distant lights")
     environment: Literal["prefiltered", "grid"] = Field(
         "prefiltered", description="environment lighting: prefiltered split sum or the env_grid lights"
+    )
+    environment_occlusion: EnvironmentOcclusion = Field(
+        "checkerboard", description="the environment's shadow lookups: half per pixel (checkerboard) or all of them"
     )
     soft_shadows: Literal["ratio", "pcss"] = Field(
         "ratio", description="area lights' soft shadows: the ratio estimator over sample views, or PCSS"
@@ -183,7 +188,11 @@ class Auto(Technique):
         self.prepared = PreparedScene(self.ctx, scene, shadow_settings(p))
         for k, (method, pass_scene, meshes, additive) in enumerate(plan):
             technique = get_technique(method)(
-                self.ctx, area_samples=p.area_samples, env_grid=p.env_grid, environment=p.environment
+                self.ctx,
+                area_samples=p.area_samples,
+                env_grid=p.env_grid,
+                environment=p.environment,
+                environment_occlusion=p.environment_occlusion,
             )
             technique.role = PassRole(meshes=meshes, clear=k == 0, extras=k == len(plan) - 1, additive=additive)
             technique.shared = self.prepared

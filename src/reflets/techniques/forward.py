@@ -45,7 +45,20 @@ from .shadows import SHADOW_SAMPLERS, ShadowSettings
 _SHADERS = "reflets/techniques/shaders/"
 #: compile-time light counts of lights.glsl (every program that includes it declares them)
 LIGHT_FLAGS = (
-    frozenset({"N_POINT", "N_DIR", "N_AREA", "N_AREA_LIGHTS", "N_ENV", "SHADOW_VIEWS", "ENV_VIEWS"}) | IBL_FLAGS
+    frozenset(
+        {
+            "N_POINT",
+            "N_DIR",
+            "N_AREA",
+            "N_AREA_LIGHTS",
+            "N_ENV",
+            "SHADOW_VIEWS",
+            "ENV_VIEWS",
+            "ENV_FULL",
+            "ENV_CHECKERBOARD",
+        }
+    )
+    | IBL_FLAGS
 )
 MESH_PROGRAM = ProgramSpec(
     "forward",
@@ -57,6 +70,9 @@ BACKGROUND_PROGRAM = ProgramSpec(
     "background", vertex=_SHADERS + "background.vert", fragment=_SHADERS + "background.frag"
 )
 #: one side of the environment grid (nu or nv): 1…1024 distant lights
+#: the prefiltered environment's occlusion: each pixel looks up half the directions and borrows the other half
+#: from its neighbours (shaders/shadows.glsl), or looks up every one
+EnvironmentOcclusion = Literal["checkerboard", "every-pixel"]
 GridSide = Annotated[int, Field(ge=1, le=1024)]
 _OUTPUTS = {"radiance": 0, "position": 1, "normal": 2, "uv": 3, "samples": 4}  # samples: the area-light methods
 
@@ -72,6 +88,9 @@ class ForwardParams(TechniqueParams):
     env_grid: tuple[GridSide, GridSide] = Field((32, 16), description="environment map as nu × nv distant lights")
     environment: Literal["prefiltered", "grid"] = Field(
         "prefiltered", description="environment lighting: prefiltered split sum (ibl.py) or the env_grid lights"
+    )
+    environment_occlusion: EnvironmentOcclusion = Field(
+        "checkerboard", description="the environment's shadow lookups: half per pixel (checkerboard) or all of them"
     )
     output: Literal["radiance", "position", "normal", "uv"] = "radiance"
 
@@ -180,12 +199,14 @@ class Forward(Technique):
             "SHADOW_VIEWS": shadows.view_count,
             **(self._ibl.flags() if self._ibl is not None else {"ENV_IBL": 0}),
             "ENV_VIEWS": shadows.environment_views[1] if self._ibl is not None and shadows.environment_views else 0,
+            "ENV_FULL": shadows.environment_full,
+            "ENV_CHECKERBOARD": int(self.params.environment_occlusion == "checkerboard"),
             **self.extra_light_flags(polygons),
         }
         self._light_buffers = [self._ssbo(rows) for rows in (points_l, dirs, area, env, polygons)]
         self._light_uniforms = {"u_area_runs": np.asarray(runs, np.float32).tobytes()} if runs else {}
-        if shadows.environment_views:
-            self._light_uniforms["u_env_first_view"] = shadows.environment_views[0]
+        if self._light_flags["ENV_VIEWS"]:
+            self._light_uniforms.update(shadows.environment_uniforms)
 
         self.shadings = self.material_shadings(scene)
         self._draws = []

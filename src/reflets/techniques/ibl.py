@@ -52,8 +52,11 @@ IBL_FLAGS = frozenset({"ENV_IBL", "IBL_LEVELS", "IBL_NODES"})
 
 
 def _downsample(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    """Box-filter an equirectangular map to (width, height) (exact when the sizes divide; else nearest blocks)."""
+    """Box-filter an equirectangular map to (width, height) (exact when the sizes divide; else nearest blocks); a
+    map smaller than that along an axis keeps its own size there (spread over more texels, a bright texel's
+    power would land in one of them and leave the others empty)."""
     h, w, _ = image.shape
+    size = (min(size[0], w), min(size[1], h))
     rows = np.minimum((np.arange(h) * size[1]) // h, size[1] - 1)
     cols = np.minimum((np.arange(w) * size[0]) // w, size[0] - 1)
     theta = (np.arange(h) + 0.5) / h * np.pi

@@ -112,6 +112,10 @@ class ShadowMaps:
         self._soft: dict[int, tuple[int, int, int]] = {}  # area light index → (first view, points, views per point)
         #: the environment's occlusion views: (first view, count), or None
         self.environment_views: tuple[int, int] | None = None
+        #: how many of them (the first) every pixel looks up: directions drawn more than once (shadows.glsl)
+        self.environment_full = 0
+        #: shadows.glsl's ``environment_visibility`` uniforms (empty without environment views)
+        self.environment_uniforms: dict[str, bytes] = {}
         views: list[dict] = []
         boxes = [(m.positions.min(axis=0), m.positions.max(axis=0)) for m in prepared.meshes if len(m.positions)]
         if boxes:  # the meshes' bounding-box corners: what the views must hold
@@ -134,10 +138,13 @@ class ShadowMaps:
                     views += [_sample_view(y, axis, w, corners) for axis in axes]
                 self._soft[index] = (first, len(points), len(axes))
             elif isinstance(light, EnvironmentLight) and prepared.environment is not None:
-                for d, w, rgb in zip(*environment_directions(prepared.environment, light), strict=True):
-                    view = directional_view(-d, centre, radius)
-                    views.append({**view, "point": tuple(d), "weight": float(w), "axis": tuple(rgb)})
+                directions, counts, colours = environment_directions(prepared.environment, light)
+                for k in np.argsort(-counts, kind="stable"):  # the directions drawn more than once first
+                    view = directional_view(-directions[k], centre, radius)
+                    view.update(point=tuple(directions[k]), weight=float(counts[k]), axis=tuple(colours[k]))
+                    views.append(view)
                 self.environment_views = (first, len(views) - first)
+                self.environment_full = int(np.count_nonzero(counts > 1))
             else:
                 continue
             self._first_view[index] = first
@@ -178,6 +185,9 @@ class ShadowMaps:
                 )
             )
         self.buffer = self._own(ctx.buffer(np.asarray(records, np.float32).tobytes()))
+        if self.environment_views:
+            first, count = self.environment_views
+            self.environment_uniforms = _environment_uniforms(views[first : first + count], first, columns, size)
         self._draw(prepared, [v["view_proj"] for v in views], columns, size)
 
     def soft_range(self, light) -> tuple[int, int, int] | None:
@@ -237,6 +247,30 @@ def light_index(scene: Scene, light) -> int | None:
     """The index of ``light`` in ``scene.light``, found by identity: a pass's scene holds some of the full
     scene's lights (the same objects), at other indices."""
     return next((i for i, candidate in enumerate(scene.light) if candidate is light), None)
+
+
+def _environment_uniforms(views: list[dict], first: int, columns: int, size: tuple[int, int]) -> dict[str, bytes]:
+    """The environment views as shadows.glsl reads them: per view the affine map from (x, 1) to its atlas uv and
+    depth (an orthographic view-projection with the tile's placement folded in: three dot products a lookup),
+    its direction and world texel size, its weight per channel, its tile's uv clamp box."""
+    affine, dirs, rgb, boxes = [], [], [], []
+    resolution = size[0] // columns
+    scale = np.array([resolution / size[0], resolution / size[1]])
+    half = 0.5 / np.asarray(size, np.float64)
+    for k, view in enumerate(views, start=first):
+        tile = np.array([(k % columns) * scale[0], (k // columns) * scale[1]])
+        rows = 0.5 * view["view_proj"][:3].copy()  # ndc → [0, 1]: ½ ndc + ½
+        rows[:, 3] += 0.5
+        rows[:2] = rows[:2] * scale[:, None]
+        rows[:2, 3] += tile
+        affine += list(rows)
+        dirs.append((*view["point"], view["texel"] / resolution))
+        rgb.append((*view["axis"], 0.0))
+        boxes.append((*(tile + half), *(tile + scale - half)))
+    return {
+        name: np.asarray(rows, np.float32).tobytes()
+        for name, rows in (("u_env_affine", affine), ("u_env_dir", dirs), ("u_env_rgb", rgb), ("u_env_box", boxes))
+    }
 
 
 def _cube_views(position: np.ndarray, centre: np.ndarray, radius: float) -> list[dict]:

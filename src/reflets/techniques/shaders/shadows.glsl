@@ -181,35 +181,75 @@ float soft_visibility(float code, vec3 x, mat3 frame, vec3 wo) {
     }
     return den > 0.0 ? num / den : 1.0;
 }
-// The environment's occlusion (ENV_VIEWS views from u_env_first_view: directions d_k drawn ∝ the map's power,
-// weighted per channel): the visible fraction of the cosine-weighted light (`diffuse`) and of the light in the
-// specular lobe (`specular`: a Phong lobe about the dominant direction r of the prefiltered lobe's width — the
-// GGX α's — in place of the BRDF, which would cost an evaluation per direction; the diffuse fraction where the
-// lobe misses every direction), per channel; one nearest-texel comparison per direction (the sum filters).
+// The environment's occlusion (ENV_VIEWS views, directions d_k drawn ∝ the map's power, weighted per channel):
+// the visible fraction of the cosine-weighted light (`diffuse`) and of the light in the specular lobe
+// (`specular`: a Phong lobe about the dominant direction r of the prefiltered lobe's width — the GGX α's — in
+// place of the BRDF, which would cost an evaluation per direction; the diffuse fraction where the lobe misses
+// every direction), per channel; one nearest-texel comparison per direction (the sum filters).
+// Checkerboard (ENV_CHECKERBOARD: the techniques' `environment_occlusion`, on by default, where fine derivatives exist):
+// the first ENV_FULL views (directions drawn more than once: a sun) are looked up at every fragment, the others
+// alternately — a fragment looks up the half of its checkerboard parity and takes the other half's sums as the
+// mean of its neighbours' across x and across y, read through fine derivatives within the 2×2 quad. Half the
+// lookups; on the test floor the error against the reference is unchanged (a 2×2 quad-shared quarter made
+// 2-pixel blocks). Needs every fragment of the quad alive: no discard before it.
 #if ENV_VIEWS > 0
-uniform int u_env_first_view;
+#if ENV_CHECKERBOARD && !defined(GL_ARB_derivative_control)  // a driver without fine derivatives: every lookup
+#undef ENV_CHECKERBOARD
+#define ENV_CHECKERBOARD 0
+#endif
+// per view k: rows 3k..3k+2 map (x, 1) to its atlas uv and depth (orthographic: affine); its direction and world
+// texel size; its weight per channel; its tile's clamp box (shadows.py `environment_uniforms`)
+uniform vec4 u_env_affine[3 * ENV_VIEWS];
+uniform vec4 u_env_dir[ENV_VIEWS];
+uniform vec4 u_env_rgb[ENV_VIEWS];
+uniform vec4 u_env_box[ENV_VIEWS];
+
+struct EnvSums {
+    vec3 num_d, den_d, num_s, den_s;
+};
+
+void add_environment_view(int k, vec3 x, vec3 n, vec3 r, float exponent, inout EnvSums sums) {
+    vec4 d = u_env_dir[k];
+    float cos_x = dot(n, d.xyz);
+    if (cos_x <= 0.0) return;
+    vec3 w = u_env_rgb[k].rgb * cos_x;
+    float lobe = pow(max(dot(r, d.xyz), 0.0), exponent);
+    float sin_t = sqrt(max(0.0, 1.0 - cos_x * cos_x));
+    vec4 p = vec4(x + n * (d.w * (0.5 + 1.5 * sin_t)), 1.0);  // normal_offset, n towards d
+    vec4 box = u_env_box[k];
+    vec2 uv = clamp(vec2(dot(u_env_affine[3 * k], p), dot(u_env_affine[3 * k + 1], p)), box.xy, box.zw);
+    float v = texture(u_shadow_nearest, vec3(uv, dot(u_env_affine[3 * k + 2], p)));
+    sums.num_d += w * v;
+    sums.den_d += w;
+    sums.num_s += w * (lobe * v);
+    sums.den_s += w * lobe;
+}
+
+#if ENV_CHECKERBOARD
+// the other half's sums at this fragment: the mean of its neighbours across x and across y (v ± dFdxFine(v))
+vec3 other_half(vec3 v, vec2 sign) {
+    return v + 0.5 * (sign.x * dFdxFine(v) + sign.y * dFdyFine(v));
+}
+#endif
+
 void environment_visibility(vec3 x, vec3 n, vec3 r, float alpha, out vec3 diffuse, out vec3 specular) {
     float exponent = 0.5 / max(alpha * alpha, 1e-4) - 0.5;  // Blinn-Phong 2/α² − 2, a quarter about r
-    vec3 num_d = vec3(0.0), den_d = vec3(0.0), num_s = vec3(0.0), den_s = vec3(0.0);
-    for (int k = 0; k < ENV_VIEWS; ++k) {
-        int view = u_env_first_view + k;
-        vec3 d = shadow_data[SHADOW_RECORD * view + 6].xyz;
-        float cos_x = dot(n, d);
-        if (cos_x <= 0.0) continue;
-        vec3 w = shadow_data[SHADOW_RECORD * view + 7].rgb * cos_x;
-        float lobe = pow(max(dot(r, d), 0.0), exponent);
-        vec2 uv;
-        float depth;
-        vec4 tile;
-        vec3 p = normal_offset(x, n, d, shadow_data[SHADOW_RECORD * view + 5].x);
-        float v = shadow_coords(view, p, uv, depth, tile) ? texture(u_shadow_nearest, vec3(uv, depth)) : 1.0;
-        num_d += w * v;
-        den_d += w;
-        num_s += w * (lobe * v);
-        den_s += w * lobe;
-    }
-    diffuse = mix(vec3(1.0), num_d / max(den_d, vec3(1e-30)), greaterThan(den_d, vec3(0.0)));
-    specular = mix(diffuse, num_s / max(den_s, vec3(1e-30)), greaterThan(den_s, 1e-12 * den_d));
+    EnvSums full = EnvSums(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+    for (int k = 0; k < ENV_FULL; ++k) add_environment_view(k, x, n, r, exponent, full);
+#if ENV_CHECKERBOARD
+    vec2 odd = mod(floor(gl_FragCoord.xy), 2.0);
+    EnvSums part = EnvSums(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+    for (int k = ENV_FULL + int(mod(odd.x + odd.y, 2.0)); k < ENV_VIEWS; k += 2) add_environment_view(k, x, n, r, exponent, part);
+    vec2 sign = 1.0 - 2.0 * odd;
+    full.num_d += part.num_d + other_half(part.num_d, sign);
+    full.den_d += part.den_d + other_half(part.den_d, sign);
+    full.num_s += part.num_s + other_half(part.num_s, sign);
+    full.den_s += part.den_s + other_half(part.den_s, sign);
+#else
+    for (int k = ENV_FULL; k < ENV_VIEWS; ++k) add_environment_view(k, x, n, r, exponent, full);
+#endif
+    diffuse = mix(vec3(1.0), full.num_d / max(full.den_d, vec3(1e-30)), greaterThan(full.den_d, vec3(0.0)));
+    specular = mix(diffuse, full.num_s / max(full.den_s, vec3(1e-30)), greaterThan(full.den_s, 1e-12 * full.den_d));
 }
 #endif
 #else
