@@ -145,3 +145,53 @@ def test_pcss_the_compared_design_shadows_too_but_less_accurately(ctx):
     error = {name: relmse(img[on_floor], ref[on_floor]) for name, img in (("ratio", ratio), ("pcss", pcss))}
     assert error["pcss"] < 0.25 * relmse(unshadowed[on_floor], ref[on_floor])
     assert error["ratio"] < error["pcss"]
+
+
+def large_floor() -> dict:
+    """The sphere on a 400 × 400 floor under the directional light: one map of the whole scene has 0.28-unit
+    texels, a quarter of the sphere's radius."""
+    data = sphere_on_floor(LIGHTS["directional"])
+    data["mesh"][0] = {**data["mesh"][0], "size": [400, 400]}
+    return data
+
+
+def test_cascades_keep_a_small_shadow_on_a_large_floor_in_place(ctx):
+    """The camera's cascades: the floor within 2 % of the reference and the shadow's mean within 10 %, as on
+    the small floor; one map of the whole scene alone (``shadow_cascades = 1``) smears the shadow (over 10× the
+    error)."""
+    from reflets.techniques.prepared import PreparedScene
+
+    scene = reflets.load_dict(large_floor())
+    prepared = PreparedScene(ctx, scene)
+    try:
+        assert prepared.shadows.cascade_count(scene.light[0]) >= 2
+        assert prepared.shadows.cascade_count(scene.light[1]) == 0  # the fill light casts no shadow
+    finally:
+        prepared.release()
+    image = reflets.render(scene, method="forward")
+    ref = reflets.reference(scene, spp=4, progress=False).image
+    unshadowed = reflets.render(
+        reflets.load_dict({**large_floor(), "light": [{**LIGHTS["directional"], "shadows": False}, FILL]})
+    )
+    floor = np.any(reflets.render(scene, method="position") != 0, axis=-1)
+    assert relmse(image[floor], ref[floor]) < 0.02
+    shadow = ref.sum(-1) < 0.5 * unshadowed.sum(-1)
+    assert shadow.sum() > 100
+    assert abs(image[shadow].mean() / ref[shadow].mean() - 1) < 0.10
+    single = reflets.render(scene, method="forward", shadow_cascades=1)
+    assert relmse(single[floor], ref[floor]) > 10 * relmse(image[floor], ref[floor])
+
+
+@pytest.mark.parametrize("method", ["forward", "auto"])
+def test_moving_the_camera_refits_the_cascades_without_preparing_again(method, ctx):
+    """A persistent renderer's camera move redraws the cascades only, and its frame is the one-shot render of the
+    moved camera (bit for bit)."""
+    moved = {"position": [1.5, 1.5, 4.0], "look_at": [0.2, 0.4, 0.0]}
+    with reflets.Renderer(reflets.load_dict(large_floor()), method=method) as renderer:
+        renderer.render()
+        renderer.set_camera(**moved)
+        image = renderer.render()
+        assert renderer.stats["prepares"] == 1
+    data = large_floor()
+    data["camera"] = {**data["camera"], **moved}
+    np.testing.assert_array_equal(image, reflets.render(reflets.load_dict(data), method=method))

@@ -42,6 +42,7 @@ from ..gpu import FrameTimer
 from ..scene.model import PolygonLight, QuadLight, Scene
 from ..techniques.base import Technique, TechniqueParams, get_technique, register_technique
 from ..techniques.forward import (
+    CASCADES_HELP,
     EnvironmentOcclusion,
     Forward,
     GridSide,
@@ -51,6 +52,7 @@ from ..techniques.forward import (
     shadow_settings,
 )
 from ..techniques.prepared import PreparedScene
+from ..techniques.shadows import CASCADES
 
 #: the method of a scene that names none
 DEFAULT_METHOD = "auto"
@@ -80,6 +82,7 @@ class AutoParams(TechniqueParams):
         "ratio", description="area lights' soft shadows: the ratio estimator over sample views, or PCSS"
     )
     shadow_samples: int = Field(4, ge=1, le=8, description="ratio: n×n shadow views per quad light")
+    shadow_cascades: int = Field(CASCADES, ge=1, le=8, description=CASCADES_HELP)
 
 
 def pass_plan(scene: Scene, area_method: str) -> list[tuple[str, Scene, frozenset[int], bool]]:
@@ -227,6 +230,8 @@ class Auto(Technique):
         return 1, samples_per_pixel_side(spp)
 
     def set_camera(self, camera) -> bool:
+        if not self.prepared.shadows.set_camera(camera):  # the shared cascades, refitted once for every pass
+            return False
         self.scene = self.scene.model_copy(update={"camera": camera})
         return all(technique.set_camera(camera) for _, technique in self.passes)
 

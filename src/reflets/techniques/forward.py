@@ -40,7 +40,7 @@ from .base import Technique, TechniqueParams, register_technique
 from .ibl import IBL_FLAGS
 from .prepared import PreparedScene
 from .shading import MaterialShading, shading_for
-from .shadows import SHADOW_SAMPLERS, ShadowSettings
+from .shadows import CASCADES, SHADOW_SAMPLERS, ShadowSettings
 
 _SHADERS = "reflets/techniques/shaders/"
 #: compile-time light counts of lights.glsl (every program that includes it declares them)
@@ -73,6 +73,7 @@ BACKGROUND_PROGRAM = ProgramSpec(
 #: the prefiltered environment's occlusion: each pixel looks up half the directions and borrows the other half
 #: from its neighbours (shaders/shadows.glsl), or looks up every one
 EnvironmentOcclusion = Literal["checkerboard", "every-pixel"]
+CASCADES_HELP = "directional lights: at most n shadow views, cascades over the camera's view and the whole scene's"
 GridSide = Annotated[int, Field(ge=1, le=1024)]
 _OUTPUTS = {"radiance": 0, "position": 1, "normal": 2, "uv": 3, "samples": 4}  # samples: the area-light methods
 
@@ -85,6 +86,7 @@ class ForwardParams(TechniqueParams):
         "ratio", description="area lights' soft shadows: the ratio estimator over sample views, or PCSS"
     )
     shadow_samples: int = Field(4, ge=1, le=8, description="ratio: n×n shadow views per quad light")
+    shadow_cascades: int = Field(CASCADES, ge=1, le=8, description=CASCADES_HELP)
     env_grid: tuple[GridSide, GridSide] = Field((32, 16), description="environment map as nu × nv distant lights")
     environment: Literal["prefiltered", "grid"] = Field(
         "prefiltered", description="environment lighting: prefiltered split sum (ibl.py) or the env_grid lights"
@@ -97,7 +99,7 @@ class ForwardParams(TechniqueParams):
 
 def shadow_settings(params) -> ShadowSettings:
     """The soft-shadow settings of a technique's (or ``auto``'s) parameters."""
-    return ShadowSettings(params.soft_shadows, params.shadow_samples)
+    return ShadowSettings(params.soft_shadows, params.shadow_samples, params.shadow_cascades)
 
 
 def check_target_size(ctx, width: int, height: int, s: int) -> None:
@@ -171,7 +173,10 @@ class Forward(Technique):
                 points_l += [(*light.position, 1.0), (*light.intensity, shadows.view_index(light) + 1.0)]
             elif isinstance(light, DirectionalLight):
                 d = -np.asarray(light.direction, dtype=np.float64)
-                dirs += [(*(d / np.linalg.norm(d)), 0.0), (*light.irradiance, shadows.view_index(light) + 1.0)]
+                dirs += [
+                    (*(d / np.linalg.norm(d)), shadows.cascade_count(light)),
+                    (*light.irradiance, shadows.view_index(light) + 1.0),
+                ]
             elif isinstance(light, QuadLight | PolygonLight):
                 rows = self.area_light_rows(light)
                 if rows:
@@ -366,7 +371,10 @@ class Forward(Technique):
         return image
 
     def set_camera(self, camera) -> bool:
-        """Move the camera without preparing again: only the clip planes depend on it."""
+        """Move the camera without preparing again: only the clip planes depend on it, and the directional
+        lights' shadow cascades (refitted by whoever made the prepared scene)."""
+        if self._owns_prepared and not self.prepared.shadows.set_camera(camera):
+            return False
         self.scene = self.scene.model_copy(update={"camera": camera})
         self._near, self._far = clip_planes_of_sphere(np.asarray(camera.position, np.float64), *self.prepared.bounds)
         return True

@@ -45,7 +45,7 @@ import numpy as np
 from ..equirect import equirect_direction, rotation_y, row_solid_angles
 from ..gpu import GLObjects, ProgramSpec, get_program, set_uniforms
 from ..scene.emitters import area_light_samples, polygon_normal
-from ..scene.geometry import bounding_sphere
+from ..scene.geometry import bounding_sphere, clip_planes_of_sphere
 from ..scene.lightmask import LUMINANCE, mask_lookup
 from ..scene.model import DirectionalLight, EnvironmentLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
@@ -75,14 +75,19 @@ SOFT_SIDE = 4
 #: a direction drawn k times is one view of weight k), one orthographic view each; the environment's light is
 #: weighted by the visible fraction of them (a sun gets its own exact direction: its shadow lands in place)
 ENV_SAMPLES = 32
+#: a directional light's cascades (Engel 2006; Zhang et al. 2006) when the camera sees part of a large scene: at
+#: most CASCADES views, the last the whole scene's, over depths at most CASCADE_RANGE far / near
+CASCADES, CASCADE_RANGE = 4, 1000.0
 
 
 @dataclass(frozen=True)
 class ShadowSettings:
-    """How area lights' soft shadows are made (the techniques' ``soft_shadows`` and ``shadow_samples``)."""
+    """How area lights' soft shadows are made and how many cascades a directional light may get (the techniques'
+    ``soft_shadows``, ``shadow_samples`` and ``shadow_cascades``)."""
 
     design: Literal["ratio", "pcss"] = "ratio"
     side: int = SOFT_SIDE  # ratio: side² sample views per quad light
+    cascades: int = CASCADES  # a directional light's views at most (1: the whole scene's alone)
 
 
 DEFAULT_SHADOWS = ShadowSettings()
@@ -110,6 +115,8 @@ class ShadowMaps:
         self.settings = settings
         self._first_view: dict[int, int] = {}  # light index → its first view
         self._soft: dict[int, tuple[int, int, int]] = {}  # area light index → (first view, points, views per point)
+        self._cascades: dict[int, tuple[int, int]] = {}  # directional light index → (first view, cascades)
+        self._scene_sphere = (np.zeros(3), 1e-6)
         #: the environment's occlusion views: (first view, count), or None
         self.environment_views: tuple[int, int] | None = None
         #: how many of them (the first) every pixel looks up: directions drawn more than once (shadows.glsl)
@@ -122,14 +129,17 @@ class ShadowMaps:
             corners = np.array([[box[(k >> a) & 1][a] for a in range(3)] for box in boxes for k in range(8)])
             centre, radius = bounding_sphere(corners)
             radius = max(radius, 1e-6)
+            self._scene_sphere = (centre, radius)
         for index, light in enumerate(scene.light):
             if not getattr(light, "shadows", False) or not boxes:
                 continue
             first = len(views)
             if isinstance(light, PointLight):
                 views += _cube_views(np.asarray(light.position, np.float64), centre, radius)
-            elif isinstance(light, DirectionalLight):
-                views.append(directional_view(np.asarray(light.direction, np.float64), centre, radius))
+            elif isinstance(light, DirectionalLight):  # placeholders: a cascade's view snaps to the texel grid
+                spheres = [*cascade_spheres(scene.camera, centre, radius, settings.cascades), (centre, radius)]
+                self._cascades[index] = (first, len(spheres))
+                views += [None] * len(spheres)
             elif isinstance(light, QuadLight | PolygonLight):
                 points, weights = _soft_samples(light, prepared.mask_of(light), settings)
                 normal = polygon_normal(light.polygon())
@@ -169,26 +179,68 @@ class ShadowMaps:
         # and a bilinear comparison costs four fetches on a software rasteriser)
         self._nearest = self._own(ctx.sampler(filter=(moderngl.NEAREST, moderngl.NEAREST), compare_func="<="))
         self._nearest.repeat_x = self._nearest.repeat_y = False
-        records = []
-        for k, view in enumerate(views):
-            tile = ((k % columns) * self.resolution / size[0], (k // columns) * self.resolution / size[1])
-            scale = (self.resolution / size[0], self.resolution / size[1])
-            records.append(
-                np.concatenate(
-                    [
-                        view["view_proj"].T.ravel(),  # four columns (GLSL mat4 from column vectors)
-                        [*tile, *scale],
-                        [view["texel"] / self.resolution, *view.get("near_far", (0.0, 0.0)), 0.0],
-                        [*view.get("point", (0.0, 0.0, 0.0)), view.get("weight", 0.0)],
-                        [*view.get("axis", (0.0, 0.0, 0.0)), 0.0],
-                    ]
-                )
-            )
-        self.buffer = self._own(ctx.buffer(np.asarray(records, np.float32).tobytes()))
+        self._columns, self._size = columns, size
+        for index, (first, count) in self._cascades.items():
+            views[first : first + count] = self._directional_views(scene.light[index], scene.camera)
+        self._views = views
+        self.buffer = self._own(ctx.buffer(np.asarray([self._record(k) for k in range(len(views))]).tobytes()))
         if self.environment_views:
             first, count = self.environment_views
             self.environment_uniforms = _environment_uniforms(views[first : first + count], first, columns, size)
-        self._draw(prepared, [v["view_proj"] for v in views], columns, size)
+        program = get_program(ctx, DEPTH_PROGRAM)
+        self._depth_program = program
+        self._depth_vaos = [self._own(prepared.vertex_array(program, i)) for i in range(len(prepared.meshes))]
+        self._fbo = self._own(ctx.framebuffer(depth_attachment=self.atlas))
+        self._draw(range(len(views)))
+
+    def _directional_views(self, light, camera) -> list[dict]:
+        """A directional light's views for ``camera``: its cascades (finest first), then the whole scene's."""
+        centre, radius = self._scene_sphere
+        direction = np.asarray(light.direction, np.float64)
+        spheres = [*cascade_spheres(camera, centre, radius, self.settings.cascades), (centre, radius)]
+        return [
+            directional_view(direction, *snap_to_texels(direction, c, r, self.resolution), centre, radius)
+            for c, r in spheres[:-1]
+        ] + [directional_view(direction, centre, radius)]
+
+    def _record(self, k: int) -> np.ndarray:
+        """View k's record (``RECORD`` vec4, float32; layout in the module docstring)."""
+        view, (columns, size) = self._views[k], (self._columns, self._size)
+        tile = ((k % columns) * self.resolution / size[0], (k // columns) * self.resolution / size[1])
+        scale = (self.resolution / size[0], self.resolution / size[1])
+        return np.concatenate(
+            [
+                view["view_proj"].T.ravel(),  # four columns (GLSL mat4 from column vectors)
+                [*tile, *scale],
+                [view["texel"] / self.resolution, *view.get("near_far", (0.0, 0.0)), 0.0],
+                [*view.get("point", (0.0, 0.0, 0.0)), view.get("weight", 0.0)],
+                [*view.get("axis", (0.0, 0.0, 0.0)), 0.0],
+            ]
+        ).astype(np.float32)
+
+    def set_camera(self, camera) -> bool:
+        """Fit the directional lights' cascades to a new camera (their records updated, their tiles drawn again:
+        the other views do not depend on the camera); False when a light's number of cascades changes (the
+        atlas's layout with it: prepare again)."""
+        fitted = {index: self._directional_views(self.scene.light[index], camera) for index in self._cascades}
+        if any(len(views) != self._cascades[index][1] for index, views in fitted.items()):
+            return False
+        redraw = []
+        for index, views in fitted.items():
+            first, count = self._cascades[index]
+            if count == 1:
+                continue  # the whole scene's view alone: the camera does not move it
+            self._views[first : first + count] = views
+            for k in range(first, first + count):
+                self.buffer.write(self._record(k).tobytes(), offset=k * RECORD * 16)
+            redraw += range(first, first + count)
+        if redraw:
+            self._draw(redraw)
+        return True
+
+    def cascade_count(self, light) -> int:
+        """How many views a directional light of this scene has (cascades and the whole scene's; 0: no shadows)."""
+        return self._cascades.get(light_index(self.scene, light), (0, 0))[1]
 
     def soft_range(self, light) -> tuple[int, int, int] | None:
         """(first view, sample points, views per point) of an area light of this scene, or None (no shadows)."""
@@ -219,21 +271,22 @@ class ShadowMaps:
             self._nearest.use(SHADOW_NEAREST_UNIT)
             self.buffer.bind_to_storage_buffer(SHADOW_BINDING)
 
-    def _draw(self, prepared, views: list[np.ndarray], columns: int, size: tuple[int, int]) -> None:
+    def _draw(self, indices) -> None:
+        """Draw views ``indices`` into their tiles (each tile cleared first)."""
         ctx = self.ctx
-        program = get_program(ctx, DEPTH_PROGRAM)
-        vaos = [self._own(prepared.vertex_array(program, i)) for i in range(len(prepared.meshes))]
-        fbo = self._own(ctx.framebuffer(depth_attachment=self.atlas))
-        fbo.use()
-        fbo.clear(depth=1.0)
+        self._fbo.use()
         ctx.enable(ctx.DEPTH_TEST)
         ctx.disable(ctx.CULL_FACE)  # two-sided surfaces cast from both sides
         ctx.polygon_offset = SLOPE_BIAS, CONSTANT_BIAS
-        r = self.resolution
-        for k, view_proj in enumerate(views):
-            ctx.viewport = ((k % columns) * r, (k // columns) * r, r, r)
-            set_uniforms(program, {"u_view_proj": view_proj.T.astype(np.float32).tobytes()})
-            for vao in vaos:
+        r, columns = self.resolution, self._columns
+        for k in indices:
+            viewport = ((k % columns) * r, (k // columns) * r, r, r)
+            self._fbo.clear(depth=1.0, viewport=viewport)
+            ctx.viewport = viewport
+            set_uniforms(
+                self._depth_program, {"u_view_proj": self._views[k]["view_proj"].T.astype(np.float32).tobytes()}
+            )
+            for vao in self._depth_vaos:
                 vao.render()
         ctx.polygon_offset = 0.0, 0.0
         ctx.disable(ctx.DEPTH_TEST)
@@ -285,16 +338,69 @@ def _cube_views(position: np.ndarray, centre: np.ndarray, radius: float) -> list
     ]
 
 
-def directional_view(direction: np.ndarray, centre: np.ndarray, radius: float) -> dict:
-    """An orthographic view along ``direction`` holding a bounding sphere: its view-projection and the world size
-    of its whole width (2 r; a texel is that over the resolution)."""
+def directional_view(
+    direction: np.ndarray,
+    centre: np.ndarray,
+    radius: float,
+    depth_centre: np.ndarray | None = None,
+    depth_radius: float | None = None,
+) -> dict:
+    """An orthographic view along ``direction`` holding a sphere across and, along the direction, the sphere
+    (``depth_centre``, ``depth_radius``) — by default the same: a cascade holds its slice of the camera's view
+    across and every caster of the scene in depth. Its view-projection and the world size of its whole width
+    (2 r; a texel is that over the resolution)."""
     d = direction / np.linalg.norm(direction)
-    eye = centre - d * 2.0 * radius
+    if depth_centre is None:
+        depth_centre, depth_radius = centre, radius
+    eye = centre + d * (float(np.dot(depth_centre - centre, d)) - 2.0 * depth_radius)
     up = (0.0, 1.0, 0.0) if abs(d[1]) < 0.99 else (1.0, 0.0, 0.0)
-    near, far = 0.5 * radius, 3.5 * radius
+    near, far = 0.5 * depth_radius, 3.5 * depth_radius
     proj = np.diag([1.0 / radius, 1.0 / radius, -2.0 / (far - near), 1.0])
     proj[2, 3] = -(far + near) / (far - near)
-    return {"view_proj": proj @ look_at(eye, centre, up), "texel": 2.0 * radius}
+    return {"view_proj": proj @ look_at(eye, eye + d, up), "texel": 2.0 * radius}
+
+
+def cascade_spheres(camera, centre: np.ndarray, radius: float, count: int = CASCADES) -> list[tuple[np.ndarray, float]]:
+    """Bounding spheres of slices of the camera's view frustum (finest first) where one view of the whole scene
+    would be coarser than a pixel at the camera's point of interest (``look_at``); none otherwise. The depths
+    the scene's sphere allows, at most ``CASCADE_RANGE`` far / near, are split logarithmically into ``count``
+    slices (each as many pixels per texel), the last left to the whole scene's view, stopping at a slice half
+    as wide as the scene."""
+    eye = np.asarray(camera.position, np.float64)
+    forward = np.asarray(camera.look_at, np.float64) - eye
+    focus = float(np.linalg.norm(forward))
+    forward /= focus
+    tan_half = math.tan(math.radians(camera.fov_y) / 2.0)
+    width, height = camera.size
+    if count < 2 or 2.0 * radius / RESOLUTION <= 2.0 * focus * tan_half / height:  # a texel ≤ a pixel: one view
+        return []
+    depth = float(np.dot(centre - eye, forward))
+    z1 = depth + radius
+    z0 = max(depth - radius, z1 / CASCADE_RANGE, clip_planes_of_sphere(eye, centre, radius)[0])
+    if z1 <= z0:
+        return []
+    k2 = tan_half**2 * (1.0 + (width / height) ** 2)  # (distance of a corner from the axis / depth)²
+    splits = z0 * (z1 / z0) ** (np.arange(count + 1) / count)
+    spheres = []
+    for a, b in zip(splits[:-2], splits[1:-1], strict=True):
+        # the smallest sphere centred on the axis through the slice's eight corners (camera rotations keep it)
+        z = min(b, 0.5 * (a + b) * (1.0 + k2))
+        r = math.sqrt(max((z - a) ** 2 + a * a * k2, (b - z) ** 2 + b * b * k2))
+        if r >= 0.5 * radius:
+            break
+        spheres.append((eye + forward * z, r))
+    return spheres
+
+
+def snap_to_texels(direction: np.ndarray, centre: np.ndarray, radius: float, resolution: int):
+    """A cascade's sphere with its radius rounded up to an eighth of an octave and its centre moved onto the
+    texel grid of its view: as the camera moves, texels stay where they were (no shimmering shadow edges)."""
+    radius = 2.0 ** (math.ceil(8.0 * math.log2(radius)) / 8.0)
+    texel = 2.0 * radius / resolution
+    d = direction / np.linalg.norm(direction)
+    across = look_at(np.zeros(3), d, (0.0, 1.0, 0.0) if abs(d[1]) < 0.99 else (1.0, 0.0, 0.0))[:2, :3]  # right, up
+    offsets = across @ centre
+    return centre + across.T @ (np.round(offsets / texel) * texel - offsets), radius
 
 
 def environment_directions(image: np.ndarray, light, count: int = ENV_SAMPLES) -> tuple[np.ndarray, np.ndarray]:

@@ -1,7 +1,7 @@
 // Provides direct_lighting(x, frame, wo): point, directional, sampled area and environment lights.
 // Light data arrive in std430 buffers filled by reflets/techniques/forward.py (layouts documented there).
 layout(std430, binding = 0) readonly buffer PointLights { vec4 point_data[]; };   // position, intensity
-layout(std430, binding = 1) readonly buffer DirLights { vec4 dir_data[]; };       // to-light dir, irradiance
+layout(std430, binding = 1) readonly buffer DirLights { vec4 dir_data[]; };       // (to-light dir, shadow cascades), (irradiance, first shadow view + 1)
 layout(std430, binding = 2) readonly buffer AreaSamples { vec4 area_data[]; };    // (y, dA), (n_L, two_sided), (L, 0)
 #if N_AREA > 0
 uniform vec4 u_area_runs[N_AREA_LIGHTS];  // per area light: its first sample, sample count, soft-shadow code

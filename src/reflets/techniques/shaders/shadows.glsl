@@ -77,9 +77,18 @@ float point_visibility(int i, vec3 x, vec3 n) {
     return shadow_lookup(view + face, p);
 }
 
+// A directional light's views: its cascades (finest first) and the whole scene's (dir_data[2i].w of them); the
+// finest that holds x with a margin for the filter and the normal offset serves.
 float dir_visibility(int i, vec3 x, vec3 n) {
     int view = int(dir_data[2 * i + 1].w) - 1;
     if (view < 0) return 1.0;
+    int last = view + int(dir_data[2 * i].w + 0.5) - 1;
+    for (; view < last; ++view) {
+        int base = SHADOW_RECORD * view;
+        vec4 clip = mat4(shadow_data[base], shadow_data[base + 1], shadow_data[base + 2], shadow_data[base + 3]) * vec4(x, 1.0);
+        float margin = 8.0 / (shadow_data[base + 4].z * float(textureSize(u_shadow_atlas, 0).x));  // 4 texels
+        if (all(lessThan(abs(clip.xy), vec2(1.0 - margin)))) break;
+    }
     float texel_size = shadow_data[SHADOW_RECORD * view + 5].x;
     return shadow_lookup(view, normal_offset(x, n, dir_data[2 * i].xyz, texel_size));
 }
