@@ -1,5 +1,6 @@
 # Quick start: `make demo` (set up + render the gallery) and `make test` (set up + run the tests).
-# `make test` also installs the [reference] extra (Mitsuba 3) so the cross-checks against it run.
+# `make test` also installs the [reference] extra (Mitsuba 3) so the cross-checks against it run, the [viewer]
+# extra and Xvfb (tools/install-system-packages) so the viewer's window tests run.
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
@@ -16,7 +17,8 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test,reference]"
+	tools/install-system-packages
+	$(BIN)/python -m pip install --quiet -e ".[test,reference,viewer]"
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed

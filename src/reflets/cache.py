@@ -101,6 +101,11 @@ class Cache:
         self._remember(key, value)
         return value
 
+    def peek(self, key: str):
+        """The result under ``key`` if it is in memory, else None (nothing loaded, nothing made)."""
+        entry = self._memory.get(key)
+        return None if entry is None else entry[0]
+
     def clear_memory(self) -> None:
         self._memory.clear()
         self._bytes = 0

@@ -63,6 +63,35 @@ def cmd_render(args) -> int:
     return 0
 
 
+def cmd_view(args) -> int:
+    from .imageio import IMAGE_WRITE_EXTENSIONS, check_output_path
+    from .viewer.window import ViewerWindow, load_script
+
+    script = load_script(args.script) if args.script else None
+    if args.screenshot:
+        check_output_path(Path(args.screenshot), IMAGE_WRITE_EXTENSIONS)
+    if args.save_scene and Path(args.save_scene).exists():
+        raise ArgumentError("exists already; choose another name (nothing was written)", file=args.save_scene)
+    if args.frames is not None and args.frames < 1:
+        raise ArgumentError(f"must be at least 1, got {args.frames}", field="--frames")
+    size = _size(args.size) if args.size else None
+    window = ViewerWindow(args.scene, method=args.method, size=size, **_params(args.param))
+    window.controller.handle({"type": "exposure", "stops": args.exposure})
+    window.controller.handle({"type": "tonemap", "mode": args.tonemap})
+    status = window.run(frames=args.frames, screenshot=args.screenshot, script=script, save_scene=args.save_scene)
+    if args.screenshot:
+        print(f"wrote {args.screenshot}")
+    if args.save_scene:
+        print(f"wrote {args.save_scene}")
+    times = status["window_frame_ms"][1:] or status["window_frame_ms"]
+    frames = len(status["window_frame_ms"])
+    print(
+        f"{frames} frames, median {np.median(times):.1f} ms, the last image of {status['spp']} spp "
+        f"({status['method']}, {status['renderer']})"
+    )
+    return 0
+
+
 def cmd_reference(args) -> int:
     from .arguments import as_scene
     from .imageio import check_output_path, write_image
@@ -264,7 +293,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene", help="scene file (.toml)")
     p.add_argument("-o", "--output", help="output image (.exr, .png, .npy, .hdr); default SCENE_STEM.exr")
     p.add_argument("--size", help="WIDTHxHEIGHT, overrides the camera's size")
-    p.add_argument("--method", help="technique name (see `reflets info`); default: the scene's, or forward")
+    p.add_argument("--method", help="technique name (see `reflets info`); default: the scene's, or auto")
     p.add_argument(
         "--spp",
         type=int,
@@ -282,6 +311,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--exposure", type=float, default=0.0, help="PNG only: exposure in stops (default 0)")
     p.add_argument("--tonemap", choices=["srgb", "aces"], default="srgb", help="PNG only: tone curve")
     p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("view", help="interactive window over the persistent renderer (orbit, pick, edit, compare)")
+    p.add_argument("scene", help="scene file (.toml)")
+    p.add_argument("--size", help="WIDTHxHEIGHT of the window, overrides the camera's size")
+    p.add_argument("--method", help="technique name (see `reflets info`); default: the scene's, or auto")
+    p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="technique parameter, repeatable")
+    p.add_argument("--frames", type=int, help="draw N frames (after the script), write --screenshot, and exit")
+    p.add_argument("--screenshot", help="with --frames: the last frame (.png: the window's pixels; .exr: HDR)")
+    p.add_argument("--script", help="JSON list of events to replay, one per frame (docs/viewer.md)")
+    p.add_argument("--save-scene", help="write the scene, edits included, as TOML when the viewer exits")
+    p.add_argument("--exposure", type=float, default=0.0, help="exposure in stops (default 0)")
+    p.add_argument("--tonemap", choices=["srgb", "aces"], default="srgb", help="tone curve (default srgb)")
+    p.set_defaults(func=cmd_view)
 
     p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
     p.add_argument("scene", help="scene file (.toml)")

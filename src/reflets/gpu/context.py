@@ -67,9 +67,29 @@ def _prepare_environment(choice: str) -> None:
         os.environ["__EGL_VENDOR_LIBRARY_FILENAMES"] = nvidia
 
 
-@cache
+_window_context = None
+
+
+def use_context(ctx) -> None:
+    """Make ``ctx`` — a context something else created and made current, e.g. a viewer's window — the process's
+    context: every renderer created afterwards draws in it (programs are cached per context). The headless EGL
+    context, if one was made, stays but is no longer handed out. ``None`` goes back to it."""
+    global _window_context
+    if ctx is not None and ctx.version_code < GL_REQUIRE:
+        raise GLUnavailableError(
+            f"the context offers OpenGL {ctx.version_code / 100:.1f}; reflets needs {GL_REQUIRE / 100:.1f}"
+        )
+    _window_context = ctx
+
+
 def get_context():
-    """The process-wide standalone moderngl context (created on first use)."""
+    """The process's moderngl context: the one given to :func:`use_context`, else the standalone EGL context
+    (created on first use)."""
+    return _window_context if _window_context is not None else _egl_context()
+
+
+@cache
+def _egl_context():
     choice = gl_choice()
     _prepare_environment(choice)
     import moderngl

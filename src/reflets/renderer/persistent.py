@@ -79,6 +79,17 @@ class Renderer:
         self.stats["frames"] = frames
         return image
 
+    @property
+    def accumulated_spp(self) -> int:
+        """Samples per pixel of the last image: a progressive method's frames since the last edit × its samples
+        per frame (``reflets.render(scene, spp=this)`` gives the same image), else the method's default."""
+        technique = self._technique
+        if technique is None:
+            return 0
+        if technique.progressive:
+            return int(self.stats["frames"]) * technique.default_spp
+        return technique.default_spp
+
     # ------------------------------------------------------------------ edits
     def set_camera(self, **fields: Any) -> None:
         """Change camera fields (``position``, ``look_at``, ``up``, ``fov_y``, ``size``)."""

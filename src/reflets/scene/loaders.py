@@ -176,3 +176,37 @@ def _first_error(exc: ValidationError, data: dict) -> str:
         msg = msg.removeprefix("Value error, ")
         return msg if msg.startswith(("mesh[", "light", "background")) else f"{field}: {msg}"
     return f"{field}: {msg[0].lower() + msg[1:]} (got {err.get('input')!r})"
+
+
+def scene_toml(scene: Scene) -> str:
+    """The scene as TOML text that :func:`load_scene` reads back to the same scene from any folder: every file
+    it names (meshes, maps, masks, measured tables, scratch profiles) made absolute."""
+    import tomli_w
+
+    def absolute(value):
+        if isinstance(value, Path):
+            return str(scene.resolve(value))
+        if isinstance(value, str) and value.startswith("file:"):  # a scratch profile read from a file
+            return "file:" + str(scene.resolve(Path(value[5:])))
+        if isinstance(value, dict):
+            return {key: absolute(item) for key, item in value.items()}
+        if isinstance(value, list | tuple):
+            return [absolute(item) for item in value]
+        return value
+
+    return tomli_w.dumps(absolute(scene.model_dump(exclude={"base_dir"}, exclude_none=True)))
+
+
+def save_scene(scene: Scene, path: str | Path, overwrite: bool = False) -> Path:
+    """Write the scene as a TOML file (see :func:`scene_toml`); an existing file is an error unless
+    ``overwrite``: an edited scene never replaces what the user had by accident."""
+    from ..errors import ArgumentError
+
+    path = Path(path)
+    if path.suffix.lower() != ".toml":
+        raise ArgumentError(f"a scene file ends in .toml, got '{path.name}'", file=path)
+    if path.exists() and not overwrite:
+        raise ArgumentError("exists already; choose another name (nothing was written)", file=path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(scene_toml(scene), encoding="utf-8")
+    return path

@@ -1,0 +1,437 @@
+"""What the window and the notebook widget share: the persistent renderer, the camera, the selection, the edits,
+the accumulation and the overlays, driven by events.
+
+An event is a dict with a ``type`` (JSON-able: a script replays a list of them, ``reflets view --script``):
+
+- raw input, as the window and the widget report it: ``pointer`` (``action`` down / move / up, ``x``, ``y`` in
+  pixels from the top-left, ``button`` left / right / middle, ``shift``), ``wheel`` (``dy`` notches), ``key``
+  (``key``: r reset, f frame, w a s d q e fly, arrows orbit). A left drag orbits, a right or middle drag pans,
+  a shift + left drag moves the selection (a light, or a mesh's transform) in the view plane, a click (down and
+  up within 3 pixels) picks what the pixel shows;
+- camera: ``orbit`` (``dx``, ``dy`` degrees), ``pan`` (``dx``, ``dy`` pixels), ``zoom`` (``factor``), ``fly``
+  (``forward``, ``right``, ``up`` scene units), ``reset`` (the scene's camera), ``frame`` (the selection, or
+  the whole scene);
+- selection and edits (what the panels' widgets send): ``pick`` (``x``, ``y``), ``select`` (``mesh`` or
+  ``light`` index, or neither: nothing), ``material`` (``fields``; ``name``, default the selected mesh's
+  material), ``light`` (``fields``; ``index``, default the selected light), ``move`` (``offset`` [x, y, z]:
+  the selected light, or the selected mesh's translation), ``transform`` (``fields``; ``index``, default the
+  selected mesh);
+- rendering: ``method`` (``name``, optional ``params``), ``shadows`` (``on``: every light's), ``exposure``
+  (``stops``), ``tonemap`` (``mode``), ``reference`` (``spp``: start computing the reference of this view in
+  the background), ``show`` (``mode``: image / reference / error).
+
+An unknown event or field is an :class:`ArgumentError` naming it.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ArgumentError
+from ..imageio import TONEMAP_MODES, tonemap
+from ..metrics import relmse
+from .camera import OrbitCamera
+from .reference import ReferenceJob
+
+#: a pointer that moves less than this between down and up is a click
+CLICK_PIXELS = 3.0
+ORBIT_DEGREES_PER_PIXEL = 0.3
+WHEEL_ZOOM = 1.1
+#: a fly key moves this fraction of the scene's radius
+FLY_STEP = 0.05
+ORBIT_KEY_DEGREES = 5.0
+SHOW_MODES = ("image", "reference", "error")
+#: frame times kept for the overlay's median
+HISTORY = 60
+
+
+class ViewerController:
+    """A scene in a persistent renderer, and the state a viewer shows of it (see the module docstring)."""
+
+    def __init__(self, scene, method: str | None = None, size: tuple[int, int] | None = None, **params):
+        from ..arguments import as_scene
+        from ..renderer import Renderer
+
+        scene = as_scene(scene)
+        self.params = dict(params)
+        self.renderer = Renderer(scene, method=method, size=size, **params)
+        self.size = tuple(size or scene.camera.size)
+        self.camera = OrbitCamera.from_camera(scene.camera.model_copy(update={"size": self.size}))
+        self.home = OrbitCamera.from_camera(scene.camera.model_copy(update={"size": self.size}))
+        #: ("mesh", i), ("light", i) or None
+        self.selection: tuple[str, int] | None = None
+        self.exposure, self.tonemap_mode, self.show = 0.0, "srgb", "image"
+        self.image: np.ndarray | None = None
+        self.frame_ms: list[float] = []
+        self.reference: ReferenceJob | None = None
+        self._pointer: dict | None = None
+        self._geometry = None  # for picking: built on the first click, dropped by an edit
+
+    # ------------------------------------------------------------------ state
+    @property
+    def scene(self):
+        return self.renderer.scene
+
+    @property
+    def method(self) -> str:
+        return self.renderer.method
+
+    def status(self) -> dict:
+        """What the overlay shows: method, median frame time, accumulated frames, selection, reference."""
+        from ..gpu import gl_info
+
+        status = {
+            "method": self.method,
+            "frame_ms": statistics.median(self.frame_ms) if self.frame_ms else float("nan"),
+            "frames": int(self.renderer.stats["frames"]),
+            "spp": self.renderer.accumulated_spp,
+            "renderer": gl_info()["renderer"],
+            "selection": self.selection_label(),
+            "show": self.show,
+        }
+        if self.reference is not None:
+            status["reference_progress"] = self.reference.progress
+            if self.reference.error:
+                status["reference_error"] = self.reference.error
+            if self.reference.image is not None and self.image is not None:
+                status["relmse"] = relmse(self.image, self.reference.image)
+        return status
+
+    def selection_label(self) -> str:
+        if self.selection is None:
+            return "nothing"
+        kind, index = self.selection
+        if kind == "mesh":
+            mesh = self.scene.mesh[index]
+            return f"mesh[{index}] ({getattr(mesh, 'shape', None) or Path(str(mesh.file)).name}, {mesh.material})"
+        return f"light[{index}] ({self.scene.light[index].type})"
+
+    # ------------------------------------------------------------------ frames
+    def render(self) -> np.ndarray:
+        """The next frame (float32 HDR, row 0 at the top); a progressive method accumulates while nothing
+        changes."""
+        t = time.perf_counter()
+        self.image = self.renderer.render()
+        self.frame_ms = [*self.frame_ms[-(HISTORY - 1) :], 1e3 * (time.perf_counter() - t)]
+        return self.image
+
+    def shown(self) -> np.ndarray:
+        """The HDR image the view shows: the frame, the reference, or the error map (|frame − reference| /
+        (reference + 0.01), in the red channel)."""
+        if self.image is None:
+            self.render()
+        if self.show == "image" or self.reference is None or self.reference.image is None:
+            return self.image
+        if self.show == "reference":
+            return self.reference.image
+        err = np.abs(self.image - self.reference.image).mean(-1) / (self.reference.image.mean(-1) + 0.01)
+        return np.stack([err, np.zeros_like(err), np.zeros_like(err)], axis=-1).astype(np.float32)
+
+    def snapshot(self) -> np.ndarray:
+        """What the view shows, tone mapped: uint8 (H, W, 3)."""
+        return tonemap(self.shown(), self.exposure, self.tonemap_mode)
+
+    # ------------------------------------------------------------------ events
+    def handle(self, event: dict) -> None:
+        """Apply one event (see the module docstring)."""
+        if not isinstance(event, dict) or "type" not in event:
+            raise ArgumentError(f"an event is a dict with a 'type', got {event!r}", field="event")
+        kind = event["type"]
+        handler = getattr(self, f"_on_{kind}", None)
+        if handler is None:
+            allowed = ", ".join(sorted(name[4:] for name in dir(self) if name.startswith("_on_")))
+            raise ArgumentError(f"unknown event type {kind!r}; allowed: {allowed}", field="event.type")
+        fields = {k: v for k, v in event.items() if k != "type"}
+        try:
+            handler(**fields)
+        except TypeError as exc:
+            raise ArgumentError(f"event {kind!r}: {exc}", field=f"event.{kind}") from None
+
+    def replay(self, events: list[dict], render_each: bool = False) -> None:
+        for event in events:
+            self.handle(event)
+            if render_each:
+                self.render()
+
+    # camera
+    def _on_orbit(self, dx: float = 0.0, dy: float = 0.0) -> None:
+        self.camera.orbit(dx, dy)
+        self._camera_moved()
+
+    def _on_pan(self, dx: float = 0.0, dy: float = 0.0) -> None:
+        self.camera.pan(dx, dy)
+        self._camera_moved()
+
+    def _on_zoom(self, factor: float) -> None:
+        self.camera.zoom(factor)
+        self._camera_moved()
+
+    def _on_fly(self, forward: float = 0.0, right: float = 0.0, up: float = 0.0) -> None:
+        self.camera.fly(forward, right, up)
+        self._camera_moved()
+
+    def _on_reset(self) -> None:
+        self.camera = OrbitCamera.from_camera(self.home_camera())
+        self._camera_moved()
+
+    def _on_frame(self) -> None:
+        centre, radius = self._bounds(self.selection)
+        self.camera.frame(centre, radius)
+        self._camera_moved()
+
+    # raw input
+    def _on_pointer(self, action: str, x: float, y: float, button: str = "left", shift: bool = False) -> None:
+        if action == "down":
+            self._pointer = {"x": x, "y": y, "start": (x, y), "button": button, "shift": shift, "moved": 0.0}
+        elif action == "move" and self._pointer is not None:
+            p = self._pointer
+            dx, dy = x - p["x"], y - p["y"]
+            p["x"], p["y"] = x, y
+            p["moved"] = max(p["moved"], math.hypot(x - p["start"][0], y - p["start"][1]))
+            if p["moved"] < CLICK_PIXELS:
+                return
+            if p["button"] == "left" and p["shift"] and self.selection is not None:
+                self._drag_selection(dx, dy)
+            elif p["button"] == "left":
+                self._on_orbit(dx * ORBIT_DEGREES_PER_PIXEL, dy * ORBIT_DEGREES_PER_PIXEL)
+            else:
+                self._on_pan(dx, dy)
+        elif action == "up" and self._pointer is not None:
+            if self._pointer["moved"] < CLICK_PIXELS and self._pointer["button"] == "left":
+                self._on_pick(x, y)
+            self._pointer = None
+        elif action not in ("down", "move", "up"):
+            raise ArgumentError(f"pointer action {action!r}; allowed: down, move, up", field="event.pointer.action")
+
+    def _on_wheel(self, dy: float) -> None:
+        self._on_zoom(WHEEL_ZOOM**dy)
+
+    def _on_key(self, key: str) -> None:
+        step = FLY_STEP * self._bounds(None)[1]
+        moves = {"w": (step, 0, 0), "s": (-step, 0, 0), "d": (0, step, 0), "a": (0, -step, 0)}
+        moves |= {"e": (0, 0, step), "q": (0, 0, -step)}
+        orbits = {"left": (-ORBIT_KEY_DEGREES, 0), "right": (ORBIT_KEY_DEGREES, 0)}
+        orbits |= {"up": (0, ORBIT_KEY_DEGREES), "down": (0, -ORBIT_KEY_DEGREES)}
+        key = key.lower()
+        if key in moves:
+            self._on_fly(*moves[key])
+        elif key in orbits:
+            self._on_orbit(*orbits[key])
+        elif key == "r":
+            self._on_reset()
+        elif key == "f":
+            self._on_frame()
+        # other keys: nothing (a window reports every key)
+
+    # selection
+    def _on_pick(self, x: float, y: float) -> None:
+        self.selection = self.pick(x, y)
+
+    def _on_select(self, mesh: int | None = None, light: int | None = None) -> None:
+        if mesh is not None and light is not None:
+            raise ArgumentError("select a mesh or a light, not both", field="event.select")
+        if mesh is not None:
+            self._check_index(mesh, self.scene.mesh, "mesh")
+            self.selection = ("mesh", mesh)
+        elif light is not None:
+            self._check_index(light, self.scene.light, "light")
+            self.selection = ("light", light)
+        else:
+            self.selection = None
+
+    def pick(self, x: float, y: float) -> tuple[str, int] | None:
+        """What pixel (x, y) (from the top-left) shows: ("mesh", i), ("light", i) for an area light's emitter,
+        or None. A ray cast on the CPU (Embree, the reference's geometry)."""
+        from ..reference.geometry import EMITTERS, MESHES, SceneGeometry
+        from ..scene.camera import pixel_rays
+
+        if self._geometry is None:
+            self._geometry = SceneGeometry(self.scene)
+        camera = self.scene.camera
+        origin, dirs = pixel_rays(camera, self.size, offsets=(x - math.floor(x), y - math.floor(y)))
+        col = int(np.clip(math.floor(x), 0, self.size[0] - 1))
+        row = int(np.clip(math.floor(y), 0, self.size[1] - 1))
+        hits = self._geometry.intersect(origin[None], dirs[row, col][None])
+        if hits.kind[0] == MESHES:
+            return "mesh", int(self._geometry.face_mesh[hits.prim[0]])
+        if hits.kind[0] == EMITTERS:
+            owner = self._geometry.emitter_owner[hits.prim[0]]
+            return "light", int(self._geometry.lights[owner][0])
+        return None
+
+    # edits
+    def _on_material(self, fields: dict, name: str | None = None) -> None:
+        if name is None:
+            if self.selection is None or self.selection[0] != "mesh":
+                raise ArgumentError("no mesh is selected: name the material", field="event.material.name")
+            name = self.scene.mesh[self.selection[1]].material
+        self.renderer.set_material(name, **fields)
+        self._edited()
+
+    def _on_light(self, fields: dict, index: int | None = None) -> None:
+        index = self._selected("light", index)
+        self.renderer.set_light(index, **fields)
+        self._edited()
+
+    def _on_transform(self, fields: dict, index: int | None = None) -> None:
+        index = self._selected("mesh", index)
+        self.renderer.set_transform(index, **fields)
+        self._edited()
+
+    def _on_move(self, offset: list[float]) -> None:
+        if self.selection is None:
+            raise ArgumentError("nothing is selected to move", field="event.move")
+        offset = np.asarray(offset, np.float64)
+        kind, index = self.selection
+        if kind == "mesh":
+            translate = np.asarray(self.scene.mesh[index].transform.translate, np.float64) + offset
+            self._on_transform({"translate": translate.tolist()}, index)
+            return
+        light = self.scene.light[index]
+        if light.type == "point":
+            fields = {"position": (np.asarray(light.position) + offset).tolist()}
+        elif light.type == "quad":
+            fields = {"corners": (np.asarray(light.corners) + offset).tolist()}
+        elif light.type == "polygon":
+            fields = {"vertices": (np.asarray(light.vertices) + offset).tolist()}
+        else:
+            raise ArgumentError(f"a {light.type} light has no position to move", field="event.move")
+        self._on_light(fields, index)
+
+    def _drag_selection(self, dx: float, dy: float) -> None:
+        """Move the selection in the view plane by a pointer drag (its depth keeps the pointer on it)."""
+        centre, _ = self._bounds(self.selection)
+        right, up, forward = self.camera.basis()
+        depth = max(float(np.dot(centre - self.camera.eye(), forward)), 1e-6)
+        size = self.camera.pixel_size(depth)
+        self._on_move((size * (dx * right - dy * up)).tolist())
+
+    # rendering
+    def _on_method(self, name: str, params: dict | None = None) -> None:
+        from ..renderer import Renderer
+
+        scene, size = self.scene, self.size
+        self.params = dict(params or {})
+        renderer = Renderer(scene, method=name, size=size, **self.params)  # errors leave the old one in place
+        self.renderer.release()
+        self.renderer = renderer
+        self._camera_moved()
+
+    def _on_shadows(self, on: bool) -> None:
+        for index, light in enumerate(self.scene.light):
+            if light.shadows != bool(on):
+                self.renderer.set_light(index, shadows=bool(on))
+        self._edited()
+
+    def _on_exposure(self, stops: float) -> None:
+        if not math.isfinite(float(stops)) or abs(float(stops)) > 64:
+            raise ArgumentError(f"exposure must be finite stops in [-64, 64], got {stops!r}", field="event.exposure")
+        self.exposure = float(stops)
+
+    def _on_tonemap(self, mode: str) -> None:
+        if mode not in TONEMAP_MODES:
+            raise ArgumentError(f"tone mapping {mode!r}; allowed: {', '.join(TONEMAP_MODES)}", field="event.tonemap")
+        self.tonemap_mode = mode
+
+    def _on_reference(self, spp: int = 64) -> None:
+        if self.reference is not None:
+            self.reference.cancel()
+        self.reference = ReferenceJob(self.scene, self.size, spp)
+
+    def _on_show(self, mode: str) -> None:
+        if mode not in SHOW_MODES:
+            raise ArgumentError(f"show {mode!r}; allowed: {', '.join(SHOW_MODES)}", field="event.show")
+        self.show = mode
+
+    # ------------------------------------------------------------------ saving
+    def save_screenshot(self, path: str | Path) -> Path:
+        """The view as shown: PNG (tone mapped as shown) or EXR / NPY / HDR (linear)."""
+        from ..imageio import IMAGE_WRITE_EXTENSIONS, check_output_path, write_image
+
+        path = Path(path)
+        check_output_path(path, IMAGE_WRITE_EXTENSIONS)
+        return write_image(path, self.shown(), exposure=self.exposure, tonemap=self.tonemap_mode)
+
+    def save_scene(self, path: str | Path, overwrite: bool = False) -> Path:
+        """The current scene, edits and camera included, as TOML (an existing file is not replaced unless
+        ``overwrite``)."""
+        from ..scene import save_scene
+
+        return save_scene(self.scene, path, overwrite=overwrite)
+
+    def save_camera(self, path: str | Path, overwrite: bool = False) -> Path:
+        """The current camera as JSON (the scene's ``[camera]`` fields)."""
+        import json
+
+        path = Path(path)
+        if path.exists() and not overwrite:
+            raise ArgumentError("exists already; choose another name (nothing was written)", file=path)
+        path.write_text(json.dumps(self.scene.camera.model_dump(), indent=2), encoding="utf-8")
+        return path
+
+    def release(self) -> None:
+        if self.reference is not None:
+            self.reference.cancel()
+        self.renderer.release()
+
+    # ------------------------------------------------------------------ internals
+    def home_camera(self):
+        return self.renderer.scene.camera.model_copy(update={**self.home.fields(), "size": self.size})
+
+    def _camera_moved(self) -> None:
+        self.renderer.set_camera(**self.camera.fields())
+        self._stale_reference()
+
+    def _edited(self) -> None:
+        self._geometry = None
+        self._stale_reference()
+
+    def _stale_reference(self) -> None:
+        """A reference of another view or scene no longer applies."""
+        if self.reference is not None and self.reference.key != _key(self.scene, self.size, self.reference.spp):
+            self.reference.cancel()
+            self.reference = None
+            self.show = "image"
+
+    def _selected(self, kind: str, index: int | None) -> int:
+        if index is not None:
+            self._check_index(index, self.scene.mesh if kind == "mesh" else self.scene.light, kind)
+            return index
+        if self.selection is None or self.selection[0] != kind:
+            raise ArgumentError(f"no {kind} is selected: give its index", field=f"event.{kind}.index")
+        return self.selection[1]
+
+    def _bounds(self, selection) -> tuple[np.ndarray, float]:
+        """Bounding sphere of the selection (a mesh, a light), or of the whole scene."""
+        from ..scene.geometry import bounding_sphere, mesh_data
+
+        scene = self.scene
+        if selection is not None and selection[0] == "mesh":
+            points = mesh_data(scene, selection[1]).positions
+        elif selection is not None and selection[0] == "light":
+            light = scene.light[selection[1]]
+            points = (
+                light.polygon() if hasattr(light, "polygon") else np.asarray([getattr(light, "position", (0, 0, 0))])
+            )
+        else:
+            points = np.concatenate(
+                [mesh_data(scene, i).positions for i in range(len(scene.mesh))] or [np.zeros((1, 3))]
+            )
+        centre, radius = bounding_sphere(np.asarray(points, np.float64))
+        return centre, max(radius, 1e-3)
+
+    @staticmethod
+    def _check_index(index, items, what: str) -> None:
+        if not isinstance(index, int) or not 0 <= index < len(items):
+            raise ArgumentError(f"no {what}[{index}]: the scene has {len(items)}", field=f"event.select.{what}")
+
+
+def _key(scene, size, spp: int) -> str:
+    from .reference import reference_key
+
+    return reference_key(scene, size, spp)

@@ -1,0 +1,42 @@
+"""The viewer's display pass: an HDR frame uploaded to a texture and drawn to the window, tone mapped on the
+GPU exactly as ``reflets.imageio.tonemap`` does on the CPU (so a window screenshot equals a rendered PNG)."""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from ..gpu import GLObjects, ProgramSpec, get_program, set_uniforms
+
+DISPLAY_PROGRAM = ProgramSpec(
+    "display", vertex="reflets/viewer/shaders/display.vert", fragment="reflets/viewer/shaders/display.frag"
+)
+
+
+class Display:
+    """Draws float32 (H, W, 3) images into the current framebuffer of ``ctx``."""
+
+    def __init__(self, ctx):
+        self.ctx = ctx
+        self._gl = GLObjects(ctx)
+        self.program = get_program(ctx, DISPLAY_PROGRAM)
+        self.vao = self._gl.own(ctx.vertex_array(self.program, []))
+        self.texture = None
+
+    def draw(self, image: np.ndarray, exposure: float = 0.0, tonemap: str = "srgb") -> None:
+        h, w = image.shape[:2]
+        if self.texture is None or self.texture.size != (w, h):
+            if self.texture is not None:
+                self.texture.release()
+            self.texture = self.ctx.texture((w, h), 3, dtype="f4")
+            self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.texture.write(np.ascontiguousarray(image, np.float32).tobytes())
+        self.texture.use(0)
+        set_uniforms(self.program, {"u_image": 0, "u_exposure": float(exposure), "u_aces": int(tonemap == "aces")})
+        self.vao.render(moderngl.TRIANGLES, vertices=3)
+
+    def release(self) -> None:
+        if self.texture is not None:
+            self.texture.release()
+            self.texture = None
+        self._gl.release()

@@ -1,0 +1,225 @@
+"""``reflets view``: a desktop window (moderngl-window's GLFW backend) over a :class:`ViewerController`.
+
+The window creates the OpenGL context and reflets draws in it (``reflets.gpu.use_context``): the renderer's
+frame is uploaded to a texture and tone mapped by the display pass. Input goes to the controller as the same
+events a script replays. Keys beyond the controller's: p saves a screenshot, t the scene (TOML, edits
+included), c the camera (JSON) — into the current folder under new names, never over a file; m cycles the
+method; x toggles shadows; v cycles image / reference / error (after g, which starts the reference); + / −
+change the exposure; Escape closes. The title shows the method, the median frame time, the accumulated frames,
+the GL renderer and the selection (and the reference's progress and relative MSE).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ArgumentError, GLUnavailableError
+
+#: methods ``m`` cycles through
+METHODS = ("auto", "forward", "ltc", "translucent", "scratches", "fermat")
+
+
+def load_script(path: str | Path) -> list[dict]:
+    """A recorded event list (JSON: a list of event objects; ``{"type": "wait", "frames": n}`` waits)."""
+    path = Path(path)
+    try:
+        events = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ArgumentError("file not found", file=path, field="--script") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ArgumentError(f"not a JSON event list: {exc}", file=path, field="--script") from None
+    if not isinstance(events, list) or not all(isinstance(e, dict) and "type" in e for e in events):
+        raise ArgumentError("must be a JSON list of objects with a 'type'", file=path, field="--script")
+    return events
+
+
+def _free_name(stem: str, suffix: str) -> Path:
+    k = 1
+    while Path(f"{stem}-{k}{suffix}").exists():
+        k += 1
+    return Path(f"{stem}-{k}{suffix}")
+
+
+class ViewerWindow:
+    """The window, its controller and the display pass (one per process: the window's context becomes reflets')."""
+
+    def __init__(self, scene, method: str | None = None, size: tuple[int, int] | None = None, **params):
+        from ..arguments import as_scene
+        from ..gpu.context import use_context
+        from .controller import ViewerController
+        from .display import Display
+
+        scene = as_scene(scene)
+        size = tuple(size or scene.camera.size)
+        try:
+            import moderngl_window as mglw
+
+            window_cls = mglw.get_local_window_cls("glfw")
+            self.wnd = window_cls(title="reflets", size=size, gl_version=(4, 3), vsync=False, resizable=False)
+        except ImportError as exc:
+            raise GLUnavailableError(
+                f"the viewer needs the 'viewer' extra ({exc.name} is missing): pip install 'reflets[viewer]'"
+            ) from None
+        except Exception as exc:  # GLFW: no display, no GLX
+            raise GLUnavailableError(
+                f"cannot open a window ({str(exc).strip() or type(exc).__name__}); without a display run it under "
+                "xvfb-run, or use reflets.Viewer in Jupyter"
+            ) from None
+        mglw.activate_context(window=self.wnd)
+        self.ctx = self.wnd.ctx
+        use_context(self.ctx)
+        self.controller = ViewerController(scene, method=method, size=size, **params)
+        self.display = Display(self.ctx)
+        self.frames = 0
+        self._bind_input()
+
+    # ------------------------------------------------------------------ loop
+    def run(
+        self,
+        frames: int | None = None,
+        screenshot: str | Path | None = None,
+        script: list[dict] | None = None,
+        save_scene: str | Path | None = None,
+    ) -> dict:
+        """Draw until the window closes, or — with ``frames`` — until that many frames are drawn and the
+        script is replayed (one event per frame); then write the screenshot (the window's pixels for PNG, the
+        shown HDR image otherwise) and the scene. Returns the controller's status and the frame times."""
+        events = list(script or [])
+        wait = 0
+        times = []
+        try:
+            while not self.wnd.is_closing:
+                if wait > 0:
+                    wait -= 1
+                elif events:
+                    event = events.pop(0)
+                    if event.get("type") == "wait":
+                        wait = int(event.get("frames", 1)) - 1
+                    else:
+                        self.controller.handle(event)
+                t = time.perf_counter()
+                self.draw()
+                done = frames is not None and self.frames >= frames and not events and wait <= 0
+                if done and screenshot is not None:
+                    self.save_screenshot(screenshot)
+                self.wnd.swap_buffers()  # also polls the window's events
+                times.append(1e3 * (time.perf_counter() - t))
+                if done:
+                    break
+            if save_scene is not None:
+                self.controller.save_scene(save_scene)
+        finally:
+            status = self.controller.status()
+            self.close()
+        return {**status, "window_frame_ms": times}
+
+    def draw(self) -> None:
+        controller = self.controller
+        controller.render()
+        self.wnd.use()
+        self.ctx.viewport = (0, 0, *self.wnd.buffer_size)
+        self.display.draw(controller.shown(), controller.exposure, controller.tonemap_mode)
+        self.frames += 1
+        if self.frames % 10 == 1:
+            self.wnd.title = self.title()
+
+    def title(self) -> str:
+        s = self.controller.status()
+        text = f"reflets — {s['method']} — {s['frame_ms']:.0f} ms — {s['frames']} frame(s) — {s['renderer']}"
+        text += f" — {s['selection']}"
+        if "reference_progress" in s:
+            text += f" — reference {100 * s['reference_progress']:.0f} %"
+        if "relmse" in s:
+            text += f" — relMSE {s['relmse']:.2e} ({s['show']})"
+        return text
+
+    def save_screenshot(self, path: str | Path) -> Path:
+        """PNG: the window's pixels as shown; EXR / NPY / HDR: the shown HDR image."""
+        from ..imageio import write_png8
+
+        path = Path(path)
+        if path.suffix.lower() != ".png":
+            return self.controller.save_screenshot(path)
+        width, height = self.wnd.buffer_size
+        data = self.wnd.fbo.read(viewport=(0, 0, width, height), components=3)
+        pixels = np.frombuffer(data, np.uint8).reshape(height, width, 3)[::-1]
+        return write_png8(path, np.ascontiguousarray(pixels))
+
+    def close(self) -> None:
+        from ..gpu.context import use_context
+
+        self.controller.release()
+        self.display.release()
+        use_context(None)
+        self.wnd.destroy()
+
+    # ------------------------------------------------------------------ input
+    def _bind_input(self) -> None:
+        wnd, handle = self.wnd, self._safe
+        buttons = {wnd.mouse.left: "left", wnd.mouse.right: "right", wnd.mouse.middle: "middle"}
+
+        def pointer(action):
+            def callback(x, y, *rest):
+                button = buttons.get(rest[-1], "left") if action != "move" else "left"
+                handle(
+                    {
+                        "type": "pointer",
+                        "action": action,
+                        "x": x,
+                        "y": y,
+                        "button": button,
+                        "shift": bool(wnd.modifiers.shift),
+                    }
+                )
+
+            return callback
+
+        wnd.mouse_press_event_func = pointer("down")
+        wnd.mouse_release_event_func = pointer("up")
+        wnd.mouse_drag_event_func = pointer("move")
+        wnd.mouse_scroll_event_func = lambda dx, dy: handle({"type": "wheel", "dy": dy})
+        wnd.key_event_func = self._key
+
+    def _key(self, key, action, modifiers) -> None:
+        keys = self.wnd.keys
+        if action != keys.ACTION_PRESS:
+            return
+        named = {keys.LEFT: "left", keys.RIGHT: "right", keys.UP: "up", keys.DOWN: "down"}
+        letters = {getattr(keys, c.upper()): c for c in "wasdqerf"}
+        c = self.controller
+        if key == keys.ESCAPE:
+            self.wnd.close()
+        elif key in named or key in letters:
+            self._safe({"type": "key", "key": named.get(key) or letters[key]})
+        elif key == keys.P:
+            print(f"wrote {self.save_screenshot(_free_name('reflets-view', '.png'))}")
+        elif key == keys.T:
+            print(f"wrote {c.save_scene(_free_name('reflets-view', '.toml'))}")
+        elif key == keys.C:
+            print(f"wrote {c.save_camera(_free_name('reflets-camera', '.json'))}")
+        elif key == keys.M:
+            current = METHODS.index(c.method) if c.method in METHODS else -1
+            self._safe({"type": "method", "name": METHODS[(current + 1) % len(METHODS)]})
+        elif key == keys.X:
+            self._safe({"type": "shadows", "on": not all(light.shadows for light in c.scene.light)})
+        elif key == keys.G:
+            self._safe({"type": "reference", "spp": 64})
+        elif key == keys.V:
+            modes = ("image", "reference", "error")
+            self._safe({"type": "show", "mode": modes[(modes.index(c.show) + 1) % 3]})
+        elif key in (keys.EQUAL, keys.MINUS):
+            self._safe({"type": "exposure", "stops": c.exposure + (0.5 if key == keys.EQUAL else -0.5)})
+
+    def _safe(self, event: dict) -> None:
+        """Interactive input: a refused event (a method that does not apply, …) prints and the viewer goes on."""
+        from ..errors import RefletsError
+
+        try:
+            self.controller.handle(event)
+        except RefletsError as exc:
+            print(f"reflets: {exc}", file=sys.stderr)

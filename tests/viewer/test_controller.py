@@ -1,0 +1,170 @@
+"""The viewer's controller, without a display: events move the camera, pick, edit, save; every frame is the
+one-shot render of the scene the controller holds (the window and the widget only show it)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import reflets
+from reflets.errors import ArgumentError
+from reflets.metrics import relmse
+from reflets.viewer import ViewerController
+
+SCENE = {
+    "camera": {"position": [0, 2.0, 4.0], "look_at": [0, 0.4, 0], "fov_y": 40, "size": [96, 72]},
+    "materials": {
+        "floor": {"type": "lambert", "albedo": [0.6, 0.6, 0.6]},
+        "ball": {"type": "microfacet", "alpha": 0.3, "diffuse": [0.4, 0.3, 0.2]},
+    },
+    "mesh": [
+        {"shape": "plane", "size": [6, 6], "material": "floor"},
+        {"shape": "sphere", "radius": 0.5, "material": "ball", "transform": {"translate": [0, 0.5, 0]}},
+    ],
+    "light": [
+        {"type": "quad", "corners": [[-0.5, 2.0, -0.5], [0.5, 2.0, -0.5], [-0.5, 2.0, 0.5]], "radiance": [4, 4, 4]},
+        {"type": "point", "position": [2, 3, 2], "intensity": [6, 6, 6]},
+    ],
+}
+
+
+@pytest.fixture
+def controller(ctx):
+    c = ViewerController(reflets.load_dict(SCENE), method="forward")
+    yield c
+    c.release()
+
+
+def pixel_of(controller, point) -> tuple[float, float]:
+    from reflets.scene.camera import project
+
+    return tuple(project(controller.scene.camera, np.asarray(point, float), controller.size))
+
+
+def test_first_frame_is_the_one_shot_render(controller):
+    np.testing.assert_array_equal(controller.render(), reflets.render(reflets.load_dict(SCENE), method="forward"))
+
+
+def test_camera_events_move_the_camera_and_the_frame_follows(controller):
+    before = controller.scene.camera.position
+    for event in (
+        {"type": "orbit", "dx": 30, "dy": 10},
+        {"type": "pan", "dx": 5, "dy": -3},
+        {"type": "zoom", "factor": 1.2},
+        {"type": "wheel", "dy": -2},
+        {"type": "key", "key": "w"},
+        {"type": "key", "key": "left"},
+    ):
+        controller.handle(event)
+    assert not np.allclose(controller.scene.camera.position, before)
+    image = controller.render()
+    np.testing.assert_array_equal(image, reflets.render(controller.scene, method="forward"))
+    controller.handle({"type": "reset"})
+    assert np.allclose(controller.scene.camera.position, before)
+    assert controller.renderer.stats["prepares"] == 1  # camera moves never prepare again
+
+
+def test_orbit_keeps_the_distance_and_the_target(controller):
+    target = np.asarray(controller.scene.camera.look_at)
+    distance = np.linalg.norm(np.asarray(controller.scene.camera.position) - target)
+    controller.handle({"type": "orbit", "dx": 90, "dy": 20})
+    eye = np.asarray(controller.scene.camera.position)
+    assert np.linalg.norm(eye - target) == pytest.approx(distance)
+    np.testing.assert_allclose(controller.scene.camera.look_at, target)
+
+
+def test_a_click_picks_what_the_pixel_shows(controller):
+    x, y = pixel_of(controller, [0, 0.5, 0])  # the sphere's centre
+    controller.handle({"type": "pointer", "action": "down", "x": x, "y": y})
+    controller.handle({"type": "pointer", "action": "up", "x": x + 1, "y": y})  # within the click radius
+    assert controller.selection == ("mesh", 1)
+    x, y = pixel_of(controller, [2.5, 0, 2.0])  # the floor
+    controller.handle({"type": "pick", "x": x, "y": y})
+    assert controller.selection == ("mesh", 0)
+    controller.handle({"type": "pick", "x": 2, "y": 2})  # the sky above the floor's far edge
+    assert controller.selection is None
+
+
+def test_a_drag_orbits_instead_of_picking(controller):
+    before = controller.scene.camera.position
+    controller.handle({"type": "pointer", "action": "down", "x": 40, "y": 30})
+    controller.handle({"type": "pointer", "action": "move", "x": 60, "y": 30})
+    controller.handle({"type": "pointer", "action": "up", "x": 60, "y": 30})
+    assert controller.selection is None
+    assert not np.allclose(controller.scene.camera.position, before)
+
+
+def test_edits_then_the_saved_scene_renders_the_same_image(controller, tmp_path):
+    """Orbit, select the sphere, set its roughness, drag the quad light with shift: the last frame equals a one-
+    shot render of the scene the viewer saves (relative MSE < 1e-4: the acceptance, here without a window)."""
+    x, y = pixel_of(controller, [0, 0.5, 0])
+    light_before = np.asarray(controller.scene.light[0].corners)
+    controller.replay(
+        [
+            {"type": "orbit", "dx": 20, "dy": 5},
+            {"type": "pick", "x": x, "y": y},
+            {"type": "material", "fields": {"alpha": 0.1}},
+            {"type": "select", "light": 0},
+            {"type": "pointer", "action": "down", "x": 40, "y": 30, "shift": True},
+            {"type": "pointer", "action": "move", "x": 55, "y": 30, "shift": True},
+            {"type": "pointer", "action": "up", "x": 55, "y": 30, "shift": True},
+        ],
+        render_each=True,
+    )
+    assert controller.scene.materials["ball"].alpha == pytest.approx(0.1)
+    moved = np.asarray(controller.scene.light[0].corners) - light_before
+    assert np.linalg.norm(moved) > 0.05 and np.allclose(moved, moved[0])  # translated, not deformed
+    frame = controller.render()
+    saved = controller.save_scene(tmp_path / "edited.toml")
+    again = reflets.render(reflets.load_scene(saved), method="forward")
+    assert relmse(frame, again) < 1e-4
+    with pytest.raises(ArgumentError, match="exists already"):
+        controller.save_scene(saved)  # nothing the user had is overwritten
+    camera = json.loads(controller.save_camera(tmp_path / "camera.json").read_text())
+    assert camera["position"] == pytest.approx(list(controller.scene.camera.position))
+
+
+def test_method_shadows_exposure_and_tonemap_events(controller):
+    controller.handle({"type": "method", "name": "ltc"})
+    assert controller.method == "ltc"
+    controller.handle({"type": "shadows", "on": False})
+    assert not any(light.shadows for light in controller.scene.light)
+    controller.handle({"type": "exposure", "stops": 1.5})
+    controller.handle({"type": "tonemap", "mode": "aces"})
+    shown = controller.snapshot()
+    assert shown.dtype == np.uint8 and shown.shape == (72, 96, 3)
+    np.testing.assert_array_equal(shown, reflets.imageio.tonemap(controller.image, 1.5, "aces"))
+
+
+@pytest.mark.parametrize(
+    "event, match",
+    [
+        ({"type": "teleport"}, "unknown event type 'teleport'; allowed: .*orbit"),
+        ({"type": "orbit", "yaw": 3}, "event 'orbit'"),
+        ({"type": "material", "fields": {"alpha": 0.1}}, "no mesh is selected"),
+        ({"type": "select", "mesh": 7}, r"no mesh\[7\]"),
+        ({"type": "show", "mode": "wireframe"}, "allowed: image, reference, error"),
+        ({"type": "method", "name": "nope"}, "nope"),
+        ("orbit", "an event is a dict"),
+    ],
+)
+def test_bad_events_are_clear_errors_and_change_nothing(controller, event, match):
+    camera = controller.scene.camera
+    with pytest.raises(reflets.errors.RefletsError, match=match):
+        controller.handle(event)
+    assert controller.scene.camera == camera and controller.method == "forward"
+
+
+def test_the_reference_runs_in_the_background_and_gives_the_error(controller):
+    controller.render()
+    controller.handle({"type": "reference", "spp": 8})
+    assert controller.reference.wait(timeout=120)
+    status = controller.status()
+    assert status["reference_progress"] == 1.0
+    assert 0.0 < status["relmse"] < 0.05  # the forward midpoint rule against the ground truth
+    controller.handle({"type": "show", "mode": "error"})
+    assert controller.shown()[..., 1:].max() == 0.0  # the error map, in red
+    controller.handle({"type": "orbit", "dx": 10})  # another view: that reference no longer applies
+    assert controller.reference is None and controller.show == "image"
