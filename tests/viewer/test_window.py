@@ -6,6 +6,7 @@ context becomes that process's reflets context)."""
 from __future__ import annotations
 
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -28,7 +29,7 @@ def reflets_cmd(*args: str, display: bool = True, timeout: float = 300) -> subpr
     if display and xvfb is None:
         pytest.fail("xvfb-run is missing: `make test` installs it (tools/install-system-packages)")
     base = [xvfb, "-a", "-s", "-screen 0 1024x768x24"] if display else []
-    env = None if display else {k: v for k, v in __import__("os").environ.items() if k != "DISPLAY"}
+    env = None if display else {k: v for k, v in os.environ.items() if k != "DISPLAY"}
     return subprocess.run(
         [*base, sys.executable, "-m", "reflets.cli", *args], capture_output=True, text=True, timeout=timeout, env=env
     )
@@ -116,8 +117,8 @@ def test_without_a_display_the_viewer_says_so(tmp_path):
     ],
 )
 def test_bad_view_arguments_are_one_line_errors(tmp_path, args, message):
-    done = reflets_cmd("view", str(SHOWCASE), *[str(tmp_path / a) if a.endswith((".json", ".bmp")) else a for a in args],
-                       display=False, timeout=60)  # fmt: skip
+    args = [str(tmp_path / a) if a.endswith((".json", ".bmp")) else a for a in args]
+    done = reflets_cmd("view", str(SHOWCASE), *args, display=False, timeout=60)
     assert done.returncode == 2
     assert message in done.stderr and "Traceback" not in done.stderr
 
