@@ -7,6 +7,7 @@
 ...     r.set_camera(position=(0, 2, 5))
 ...     frame = r.render()
 >>> truth = reflets.reference(scene, spp=256) # NumPy Monte Carlo: .image, .stderr
+>>> reflets.Viewer(scene)                     # in Jupyter: an interactive view (the 'viewer' extra)
 """
 
 from . import materials  # noqa: F401  (first: completes the scene model with every material type)
@@ -17,6 +18,16 @@ from .renderer import Renderer
 from .scene import Scene, load_dict, load_scene
 
 __version__ = "0.1.0"
+
+
+def __getattr__(name: str):
+    """``reflets.Viewer`` (the Jupyter widget) is imported on first use: it needs the 'viewer' extra."""
+    if name == "Viewer":
+        from .viewer.notebook import Viewer
+
+        return Viewer
+    raise AttributeError(f"module 'reflets' has no attribute {name!r}")
+
 __all__ = [
     "Scene",
     "load_scene",
@@ -26,5 +37,6 @@ __all__ = [
     "reference",
     "compare",
     "RefletsError",
+    "Viewer",
     "__version__",
 ]
