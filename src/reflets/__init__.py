@@ -28,6 +28,7 @@ def __getattr__(name: str):
         return Viewer
     raise AttributeError(f"module 'reflets' has no attribute {name!r}")
 
+
 __all__ = [
     "Scene",
     "load_scene",

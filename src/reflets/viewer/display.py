@@ -32,6 +32,7 @@ class Display:
             self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.texture.write(np.ascontiguousarray(image, np.float32).tobytes())
         self.texture.use(0)
+        self.ctx.enable_only(moderngl.NOTHING)  # no blending or depth test left by a pass
         set_uniforms(self.program, {"u_image": 0, "u_exposure": float(exposure), "u_aces": int(tonemap == "aces")})
         self.vao.render(moderngl.TRIANGLES, vertices=3)
 

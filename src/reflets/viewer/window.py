@@ -5,7 +5,8 @@ frame is uploaded to a texture and tone mapped by the display pass. Input goes t
 events a script replays. Keys beyond the controller's: p saves a screenshot, t the scene (TOML, edits
 included), c the camera (JSON) — into the current folder under new names, never over a file; m cycles the
 method; x toggles shadows; v cycles image / reference / error (after g, which starts the reference); + / −
-change the exposure; Escape closes. The title shows the method, the median frame time, the accumulated frames,
+change the exposure; h hides the panels (viewer/panels.py: the same as widgets); Escape closes. Input over a
+panel is the panel's. The title shows the method, the median frame time, the accumulated frames,
 the GL renderer and the selection (and the reference's progress and relative MSE).
 """
 
@@ -48,7 +49,9 @@ def _free_name(stem: str, suffix: str) -> Path:
 class ViewerWindow:
     """The window, its controller and the display pass (one per process: the window's context becomes reflets')."""
 
-    def __init__(self, scene, method: str | None = None, size: tuple[int, int] | None = None, **params):
+    def __init__(
+        self, scene, method: str | None = None, size: tuple[int, int] | None = None, panels: bool = True, **params
+    ):
         from ..arguments import as_scene
         from ..gpu.context import use_context
         from .controller import ViewerController
@@ -75,6 +78,11 @@ class ViewerWindow:
         use_context(self.ctx)
         self.controller = ViewerController(scene, method=method, size=size, **params)
         self.display = Display(self.ctx)
+        self.panels = None
+        if panels:
+            from .panels import Panels
+
+            self.panels = Panels(self.wnd)
         self.frames = 0
         self._bind_input()
 
@@ -106,7 +114,8 @@ class ViewerWindow:
                 self.draw()
                 done = frames is not None and self.frames >= frames and not events and wait <= 0
                 if done and screenshot is not None:
-                    self.save_screenshot(screenshot)
+                    self.save_screenshot(screenshot)  # the view, without the panels drawn over it
+                self.draw_panels()
                 self.wnd.swap_buffers()  # also polls the window's events
                 times.append(1e3 * (time.perf_counter() - t))
                 if done:
@@ -127,6 +136,25 @@ class ViewerWindow:
         self.frames += 1
         if self.frames % 10 == 1:
             self.wnd.title = self.title()
+
+    def draw_panels(self) -> None:
+        """The panels over the view; their widgets' events go to the controller, their saves to new files."""
+        if self.panels is None:
+            return
+        for event in self.panels.draw(self.controller):
+            self._safe(event)
+        for what in self.panels.saves:
+            self._save(what)
+
+    def _save(self, what: str) -> None:
+        c = self.controller
+        if what == "screenshot":
+            path = self.save_screenshot(_free_name("reflets-view", ".png"))
+        elif what == "scene":
+            path = c.save_scene(_free_name("reflets-view", ".toml"))
+        else:
+            path = c.save_camera(_free_name("reflets-camera", ".json"))
+        print(f"wrote {path}")
 
     def title(self) -> str:
         s = self.controller.status()
@@ -155,6 +183,8 @@ class ViewerWindow:
 
         self.controller.release()
         self.display.release()
+        if self.panels is not None:
+            self.panels.release()
         use_context(None)
         self.wnd.destroy()
 
@@ -162,31 +192,42 @@ class ViewerWindow:
     def _bind_input(self) -> None:
         wnd, handle = self.wnd, self._safe
         buttons = {wnd.mouse.left: "left", wnd.mouse.right: "right", wnd.mouse.middle: "middle"}
+        ui = self.panels.renderer if self.panels is not None else None
 
-        def pointer(action):
+        def pointer(action: str, forward):
             def callback(x, y, *rest):
+                if ui is not None:
+                    forward(x, y, *rest)
+                    if self.panels.wants_mouse and action != "up":
+                        return  # over a panel: the panel's
                 button = buttons.get(rest[-1], "left") if action != "move" else "left"
-                handle(
-                    {
-                        "type": "pointer",
-                        "action": action,
-                        "x": x,
-                        "y": y,
-                        "button": button,
-                        "shift": bool(wnd.modifiers.shift),
-                    }
-                )
+                handle({"type": "pointer", "action": action, "x": x, "y": y, "button": button,
+                        "shift": bool(wnd.modifiers.shift)})  # fmt: skip
 
             return callback
 
-        wnd.mouse_press_event_func = pointer("down")
-        wnd.mouse_release_event_func = pointer("up")
-        wnd.mouse_drag_event_func = pointer("move")
-        wnd.mouse_scroll_event_func = lambda dx, dy: handle({"type": "wheel", "dy": dy})
+        def scroll(dx, dy):
+            if ui is not None:
+                ui.mouse_scroll_event(dx, dy)
+                if self.panels.wants_mouse:
+                    return
+            handle({"type": "wheel", "dy": dy})
+
+        wnd.mouse_press_event_func = pointer("down", ui.mouse_press_event if ui else None)
+        wnd.mouse_release_event_func = pointer("up", ui.mouse_release_event if ui else None)
+        wnd.mouse_drag_event_func = pointer("move", ui.mouse_drag_event if ui else None)
+        if ui is not None:
+            wnd.mouse_position_event_func = ui.mouse_position_event
+            wnd.unicode_char_entered_func = ui.unicode_char_entered
+        wnd.mouse_scroll_event_func = scroll
         wnd.key_event_func = self._key
 
     def _key(self, key, action, modifiers) -> None:
         keys = self.wnd.keys
+        if self.panels is not None:
+            self.panels.renderer.key_event(key, action, modifiers)
+            if self.panels.wants_keyboard:
+                return
         if action != keys.ACTION_PRESS:
             return
         named = {keys.LEFT: "left", keys.RIGHT: "right", keys.UP: "up", keys.DOWN: "down"}
@@ -197,11 +238,13 @@ class ViewerWindow:
         elif key in named or key in letters:
             self._safe({"type": "key", "key": named.get(key) or letters[key]})
         elif key == keys.P:
-            print(f"wrote {self.save_screenshot(_free_name('reflets-view', '.png'))}")
+            self._save("screenshot")
         elif key == keys.T:
-            print(f"wrote {c.save_scene(_free_name('reflets-view', '.toml'))}")
+            self._save("scene")
         elif key == keys.C:
-            print(f"wrote {c.save_camera(_free_name('reflets-camera', '.json'))}")
+            self._save("camera")
+        elif key == keys.H and self.panels is not None:
+            self.panels.visible = not self.panels.visible
         elif key == keys.M:
             current = METHODS.index(c.method) if c.method in METHODS else -1
             self._safe({"type": "method", "name": METHODS[(current + 1) % len(METHODS)]})
