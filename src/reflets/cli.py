@@ -83,6 +83,8 @@ def cmd_view(args) -> int:
         print(f"wrote {args.screenshot}")
     if args.save_scene:
         print(f"wrote {args.save_scene}")
+    if args.stats:
+        Path(args.stats).write_text(json.dumps(status, indent=1), encoding="utf-8")
     times = status["window_frame_ms"][1:] or status["window_frame_ms"]
     frames = len(status["window_frame_ms"])
     print(
@@ -321,6 +323,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--screenshot", help="with --frames: the last frame (.png: the window's pixels; .exr: HDR)")
     p.add_argument("--script", help="JSON list of events to replay, one per frame (docs/viewer.md)")
     p.add_argument("--save-scene", help="write the scene, edits included, as TOML when the viewer exits")
+    p.add_argument("--stats", help="write the frame times, event latencies and status as JSON when the viewer exits")
     p.add_argument("--exposure", type=float, default=0.0, help="exposure in stops (default 0)")
     p.add_argument("--tonemap", choices=["srgb", "aces"], default="srgb", help="tone curve (default srgb)")
     p.set_defaults(func=cmd_view)

@@ -25,6 +25,7 @@ SUITES: dict[str, str] = {
     "renderer": "reflets.bench.renderer:bench_renderer",
     "shadows": "reflets.bench.shadows:bench_shadows",
     "ibl": "reflets.bench.ibl:bench_ibl",
+    "viewer": "reflets.bench.viewer:bench_viewer",
 }
 
 

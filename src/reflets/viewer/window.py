@@ -99,9 +99,12 @@ class ViewerWindow:
         shown HDR image otherwise) and the scene. Returns the controller's status and the frame times."""
         events = list(script or [])
         wait = 0
-        times = []
+        times, latencies = [], []
+        first_frame = None
         try:
             while not self.wnd.is_closing:
+                t = time.perf_counter()
+                handled = False
                 if wait > 0:
                     wait -= 1
                 elif events:
@@ -110,7 +113,7 @@ class ViewerWindow:
                         wait = int(event.get("frames", 1)) - 1
                     else:
                         self.controller.handle(event)
-                t = time.perf_counter()
+                        handled = True
                 self.draw()
                 done = frames is not None and self.frames >= frames and not events and wait <= 0
                 if done and screenshot is not None:
@@ -118,6 +121,10 @@ class ViewerWindow:
                 self.draw_panels()
                 self.wnd.swap_buffers()  # also polls the window's events
                 times.append(1e3 * (time.perf_counter() - t))
+                if handled:  # from the event to its frame on screen
+                    latencies.append(times[-1])
+                if first_frame is None:
+                    first_frame = time.time()  # wall clock: a caller that started the process compares
                 if done:
                     break
             if save_scene is not None:
@@ -125,6 +132,8 @@ class ViewerWindow:
         finally:
             status = self.controller.status()
             self.close()
+        status["event_latency_ms"] = latencies
+        status["first_frame_at"] = first_frame
         return {**status, "window_frame_ms": times}
 
     def draw(self) -> None:
