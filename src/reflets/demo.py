@@ -113,6 +113,7 @@ class DemoResult:
     png: str
     reference: dict | None = None  # metrics vs the NumPy reference, its image and timing
     description: str = ""  # the scene file's description (what to look at, what the reference can render)
+    view: str = ""  # the command that opens this scene and method in the interactive viewer
 
 
 def scene_path(name: str) -> Path:
@@ -197,6 +198,9 @@ def _render_entry(ctx, name: str, method: Method, size, out_dir: Path) -> DemoRe
         analytic_max_rel_error=error,
         exr=f"{stem}.exr",
         png=f"{stem}.png",
+        view=" ".join(
+            [f"reflets view {scene_path(name)} --method {method.name}"] + [f"--param {k}={v}" for k, v in method.params]
+        ),
     )
 
 
@@ -298,7 +302,9 @@ def _write_gallery(out_dir: Path, results: list[DemoResult], info: dict) -> None
             + (f"<br><small>{html.escape(r.description)}</small>" if r.description else "")
             + f"<br>method <code>{html.escape(r.method)}</code>, "
             f"{r.size}<br>prepare {r.prepare_ms:.0f} ms, frame {r.frame_ms:.1f} ms ({html.escape(r.timer)}, median "
-            f"of {FRAMES}){err}</figcaption></figure>"
+            f"of {FRAMES}){err}"
+            + (f"<br><small>interactive: <code>{html.escape(r.view)}</code></small>" if r.view else "")
+            + "</figcaption></figure>"
         )
     page = f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>reflets demo</title>

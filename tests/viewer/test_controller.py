@@ -168,3 +168,27 @@ def test_the_reference_runs_in_the_background_and_gives_the_error(controller):
     assert controller.shown()[..., 1:].max() == 0.0  # the error map, in red
     controller.handle({"type": "orbit", "dx": 10})  # another view: that reference no longer applies
     assert controller.reference is None and controller.show == "image"
+
+
+def test_a_click_on_a_light_s_marker_selects_it_and_shift_drag_moves_it(controller):
+    pixels = controller.light_pixels()
+    assert set(pixels) == {0, 1}  # the quad's centre and the point light
+    x, y = pixels[1]
+    controller.handle({"type": "pick", "x": x + 3, "y": y - 2})  # within the marker
+    assert controller.selection == ("light", 1)
+    before = np.asarray(controller.scene.light[1].position)
+    controller.handle({"type": "move", "offset": [0.5, 0.0, -0.25]})
+    np.testing.assert_allclose(controller.scene.light[1].position, before + [0.5, 0.0, -0.25])
+
+
+def test_fly_mode_turns_the_view_about_the_eye(controller):
+    controller.handle({"type": "key", "key": "l"})
+    assert controller.fly_mode
+    eye = np.asarray(controller.scene.camera.position)
+    controller.handle({"type": "pointer", "action": "down", "x": 40, "y": 30})
+    controller.handle({"type": "pointer", "action": "move", "x": 70, "y": 40})
+    controller.handle({"type": "pointer", "action": "up", "x": 70, "y": 40})
+    np.testing.assert_allclose(controller.scene.camera.position, eye, atol=1e-9)  # the eye stays
+    assert not np.allclose(controller.scene.camera.look_at, [0, 0.4, 0])  # the view turned
+    controller.handle({"type": "key", "key": "w"})  # and flies forward
+    assert np.linalg.norm(np.asarray(controller.scene.camera.position) - eye) > 0.01

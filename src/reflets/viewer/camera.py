@@ -76,6 +76,12 @@ class OrbitCamera:
         self.yaw -= math.radians(dyaw_degrees)
         self.pitch = float(np.clip(self.pitch + math.radians(dpitch_degrees), -MAX_PITCH, MAX_PITCH))
 
+    def look(self, dyaw_degrees: float, dpitch_degrees: float) -> None:
+        """Turn the view about the eye (fly mode): the target moves, the eye stays."""
+        eye = self.eye()
+        self.orbit(dyaw_degrees, -dpitch_degrees)
+        self.target = self.target + (eye - self.eye())
+
     def pan(self, dx_pixels: float, dy_pixels: float) -> None:
         """Move the target (and the eye) so that the scene follows the pointer."""
         self._moved()

@@ -5,12 +5,13 @@ An event is a dict with a ``type`` (JSON-able: a script replays a list of them, 
 
 - raw input, as the window and the widget report it: ``pointer`` (``action`` down / move / up, ``x``, ``y`` in
   pixels from the top-left, ``button`` left / right / middle, ``shift``), ``wheel`` (``dy`` notches), ``key``
-  (``key``: r reset, f frame, w a s d q e fly, arrows orbit). A left drag orbits, a right or middle drag pans,
+  (``key``: r reset, f frame, w a s d q e fly, l fly mode, arrows orbit). A left drag orbits (in fly mode:
+  turns the view about the eye), a right or middle drag pans,
   a shift + left drag moves the selection (a light, or a mesh's transform) in the view plane, a click (down and
   up within 3 pixels) picks what the pixel shows;
-- camera: ``orbit`` (``dx``, ``dy`` degrees), ``pan`` (``dx``, ``dy`` pixels), ``zoom`` (``factor``), ``fly``
-  (``forward``, ``right``, ``up`` scene units), ``reset`` (the scene's camera), ``frame`` (the selection, or
-  the whole scene);
+- camera: ``orbit`` (``dx``, ``dy`` degrees), ``look`` (the same about the eye), ``pan`` (``dx``, ``dy``
+  pixels), ``zoom`` (``factor``), ``fly`` (``forward``, ``right``, ``up`` scene units), ``fly_mode`` (``on``),
+  ``reset`` (the scene's camera), ``frame`` (the selection, or the whole scene);
 - selection and edits (what the panels' widgets send): ``pick`` (``x``, ``y``), ``select`` (``mesh`` or
   ``light`` index, or neither: nothing), ``material`` (``fields``; ``name``, default the selected mesh's
   material), ``light`` (``fields``; ``index``, default the selected light), ``move`` (``offset`` [x, y, z]:
@@ -40,6 +41,8 @@ from .reference import ReferenceJob
 
 #: a pointer that moves less than this between down and up is a click
 CLICK_PIXELS = 3.0
+#: a click this close to a point light's marker selects the light
+MARKER_PIXELS = 8.0
 ORBIT_DEGREES_PER_PIXEL = 0.3
 WHEEL_ZOOM = 1.1
 #: a fly key moves this fraction of the scene's radius
@@ -61,11 +64,13 @@ class ViewerController:
         self.params = dict(params)
         self.renderer = Renderer(scene, method=method, size=size, **params)
         self.size = tuple(size or scene.camera.size)
-        self.camera = OrbitCamera.from_camera(scene.camera.model_copy(update={"size": self.size}))
-        self.home = OrbitCamera.from_camera(scene.camera.model_copy(update={"size": self.size}))
+        self.home = scene.camera.model_copy(update={"size": self.size})  # what reset goes back to
+        self.camera = OrbitCamera.from_camera(self.home)
         #: ("mesh", i), ("light", i) or None
         self.selection: tuple[str, int] | None = None
         self.exposure, self.tonemap_mode, self.show = 0.0, "srgb", "image"
+        #: a left drag turns the view about the eye (fly) instead of orbiting the target
+        self.fly_mode = False
         self.image: np.ndarray | None = None
         self.frame_ms: list[float] = []
         self.reference: ReferenceJob | None = None
@@ -108,7 +113,8 @@ class ViewerController:
         kind, index = self.selection
         if kind == "mesh":
             mesh = self.scene.mesh[index]
-            return f"mesh[{index}] ({getattr(mesh, 'shape', None) or Path(str(mesh.file)).name}, {mesh.material})"
+            what = mesh.name or getattr(mesh, "shape", None) or Path(str(mesh.file)).name
+            return f"mesh[{index}] ({what}, {mesh.material})"
         return f"light[{index}] ({self.scene.light[index].type})"
 
     # ------------------------------------------------------------------ frames
@@ -163,6 +169,13 @@ class ViewerController:
         self.camera.orbit(dx, dy)
         self._camera_moved()
 
+    def _on_look(self, dx: float = 0.0, dy: float = 0.0) -> None:
+        self.camera.look(dx, dy)
+        self._camera_moved()
+
+    def _on_fly_mode(self, on: bool) -> None:
+        self.fly_mode = bool(on)
+
     def _on_pan(self, dx: float = 0.0, dy: float = 0.0) -> None:
         self.camera.pan(dx, dy)
         self._camera_moved()
@@ -176,7 +189,7 @@ class ViewerController:
         self._camera_moved()
 
     def _on_reset(self) -> None:
-        self.camera = OrbitCamera.from_camera(self.home_camera())
+        self.camera = OrbitCamera.from_camera(self.home)
         self._camera_moved()
 
     def _on_frame(self) -> None:
@@ -197,6 +210,8 @@ class ViewerController:
                 return
             if p["button"] == "left" and p["shift"] and self.selection is not None:
                 self._drag_selection(dx, dy)
+            elif p["button"] == "left" and self.fly_mode:
+                self._on_look(dx * ORBIT_DEGREES_PER_PIXEL, dy * ORBIT_DEGREES_PER_PIXEL)
             elif p["button"] == "left":
                 self._on_orbit(dx * ORBIT_DEGREES_PER_PIXEL, dy * ORBIT_DEGREES_PER_PIXEL)
             else:
@@ -222,6 +237,8 @@ class ViewerController:
             self._on_fly(*moves[key])
         elif key in orbits:
             self._on_orbit(*orbits[key])
+        elif key == "l":
+            self.fly_mode = not self.fly_mode
         elif key == "r":
             self._on_reset()
         elif key == "f":
@@ -245,11 +262,14 @@ class ViewerController:
             self.selection = None
 
     def pick(self, x: float, y: float) -> tuple[str, int] | None:
-        """What pixel (x, y) (from the top-left) shows: ("mesh", i), ("light", i) for an area light's emitter,
-        or None. A ray cast on the CPU (Embree, the reference's geometry)."""
+        """What pixel (x, y) (from the top-left) shows: ("light", i) near a point light's marker or on an area
+        light's emitter, ("mesh", i), or None. A ray cast on the CPU (Embree, the reference's geometry)."""
         from ..reference.geometry import EMITTERS, MESHES, SceneGeometry
         from ..scene.camera import pixel_rays
 
+        for index, pixel in self.light_pixels().items():  # a point light's marker (it has no surface to hit)
+            if self.scene.light[index].type == "point" and math.hypot(pixel[0] - x, pixel[1] - y) <= MARKER_PIXELS:
+                return "light", index
         if self._geometry is None:
             self._geometry = SceneGeometry(self.scene)
         camera = self.scene.camera
@@ -263,6 +283,22 @@ class ViewerController:
             owner = self._geometry.emitter_owner[hits.prim[0]]
             return "light", int(self._geometry.lights[owner][0])
         return None
+
+    def light_pixels(self) -> dict[int, tuple[float, float]]:
+        """Where each point and area light (its centre) is in the view, in pixels from the top-left: the panels
+        draw a marker there (a gizmo to click, then shift-drag)."""
+        from ..scene.camera import project
+
+        points = {}
+        for index, light in enumerate(self.scene.light):
+            if light.type == "point":
+                points[index] = np.asarray(light.position, np.float64)
+            elif light.type in ("quad", "polygon"):
+                points[index] = np.asarray(light.polygon(), np.float64).mean(axis=0)
+        if not points:
+            return {}
+        pixels = project(self.scene.camera, np.array(list(points.values())), self.size)
+        return {i: (float(p[0]), float(p[1])) for i, p in zip(points, pixels, strict=True) if np.all(np.isfinite(p))}
 
     # edits
     def _on_material(self, fields: dict, name: str | None = None) -> None:
@@ -380,9 +416,6 @@ class ViewerController:
         self.renderer.release()
 
     # ------------------------------------------------------------------ internals
-    def home_camera(self):
-        return self.renderer.scene.camera.model_copy(update={**self.home.fields(), "size": self.size})
-
     def _camera_moved(self) -> None:
         self.renderer.set_camera(**self.camera.fields())
         self._stale_reference()

@@ -79,6 +79,7 @@ class Panels:
         self._events, self.saves = [], []
         imgui.new_frame()
         if self.visible:
+            self._markers(controller)
             self._view(controller)
             self._frame(controller)
             self._selection(controller)
@@ -158,6 +159,11 @@ class Panels:
         imgui.set_next_window_size(imgui.ImVec2(280, 0), imgui.Cond_.first_use_ever)
         imgui.begin("Selection")
         imgui.text(c.selection_label())
+        for index in range(len(c.scene.light)):  # lights without a surface to click
+            if index:
+                imgui.same_line()
+            if imgui.small_button(f"light[{index}]"):
+                self._events.append({"type": "select", "light": index})
         if c.selection is not None:
             kind, index = c.selection
             if kind == "mesh":
@@ -177,6 +183,21 @@ class Panels:
                     self._field(f"l.{index}.{field}", field, value,
                                 lambda f, v, i=index: {"type": "light", "index": i, "fields": {f: v}})  # fmt: skip
         imgui.end()
+
+    def _markers(self, c) -> None:
+        """The lights' gizmos: a disc at each point light, a ring at each area light's centre (yellow when
+        selected); a click selects, a shift-drag moves."""
+        imgui = self.imgui
+        draw = imgui.get_background_draw_list()
+        for index, (x, y) in c.light_pixels().items():
+            selected = c.selection == ("light", index)
+            colour = imgui.get_color_u32(imgui.ImVec4(1.0, 0.85, 0.1, 1.0) if selected else imgui.ImVec4(1, 1, 1, 0.9))
+            centre = imgui.ImVec2(x, y)
+            if c.scene.light[index].type == "point":
+                draw.add_circle_filled(centre, 5.0, colour)
+            else:
+                draw.add_circle(centre, 7.0, colour, 0, 2.0)
+            draw.add_text(imgui.ImVec2(x + 8, y - 8), colour, f"light[{index}]")
 
     # ------------------------------------------------------------------ widgets
     def _choice(self, label: str, current: str, options: tuple[str, ...], event) -> None:

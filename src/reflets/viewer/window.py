@@ -20,9 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError, GLUnavailableError
-
-#: methods ``m`` cycles through
-METHODS = ("auto", "forward", "ltc", "translucent", "scratches", "fermat")
+from .panels import METHODS  # what m cycles through: the panel's list
 
 
 def load_script(path: str | Path) -> list[dict]:
@@ -240,7 +238,7 @@ class ViewerWindow:
         if action != keys.ACTION_PRESS:
             return
         named = {keys.LEFT: "left", keys.RIGHT: "right", keys.UP: "up", keys.DOWN: "down"}
-        letters = {getattr(keys, c.upper()): c for c in "wasdqerf"}
+        letters = {getattr(keys, c.upper()): c for c in "wasdqerfl"}
         c = self.controller
         if key == keys.ESCAPE:
             self.wnd.close()
