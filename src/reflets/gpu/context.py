@@ -6,7 +6,8 @@
 - ``nvidia``: only NVIDIA's EGL vendor library; an error if it is missing;
 - ``llvmpipe``: Mesa's software rasteriser (what CI and machines without a GPU use).
 
-Everything GPU in reflets takes its context from :func:`get_context`, so one process holds one context.
+Everything GPU in reflets takes its context from :func:`get_context`, so one process holds one context — the
+EGL one made here, or one a window made and handed over (:func:`use_context`, the viewer).
 """
 
 from __future__ import annotations

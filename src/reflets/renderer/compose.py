@@ -62,8 +62,7 @@ LIGHT_KINDS = ("point", "directional", "quad", "polygon", "environment")
 
 class AutoParams(TechniqueParams):
     """Parameters of ``auto`` (``area_samples``, ``env_grid``, ``environment`` and ``environment_occlusion`` go to
-    every pass, as in
-    ``forward``; the shadow settings to the prepared scene they share)."""
+    every pass, as in ``forward``; the shadow settings to the prepared scene they share)."""
 
     area_method: Literal["ltc", "forward", "brute", "adaptive", "biased", "analytic", "mc"] = Field(
         "ltc", description="how BRDF-library materials (and translucent ones' far field) take quad / polygon lights"

@@ -70,11 +70,11 @@ BACKGROUND_PROGRAM = ProgramSpec(
     "background", vertex=_SHADERS + "background.vert", fragment=_SHADERS + "background.frag"
 )
 #: one side of the environment grid (nu or nv): 1…1024 distant lights
+GridSide = Annotated[int, Field(ge=1, le=1024)]
 #: the prefiltered environment's occlusion: each pixel looks up half the directions and borrows the other half
 #: from its neighbours (shaders/shadows.glsl), or looks up every one
 EnvironmentOcclusion = Literal["checkerboard", "every-pixel"]
 CASCADES_HELP = "directional lights: at most n shadow views, cascades over the camera's view and the whole scene's"
-GridSide = Annotated[int, Field(ge=1, le=1024)]
 _OUTPUTS = {"radiance": 0, "position": 1, "normal": 2, "uv": 3, "samples": 4}  # samples: the area-light methods
 
 

@@ -1,4 +1,4 @@
-"""Shadow maps of every light but the environment, in one depth atlas shared by every pass of a frame.
+"""Shadow maps of every light, in one depth atlas shared by every pass of a frame.
 
 Every technique shades its lights through ``shaders/lights.glsl`` (or, for the scratch lobes and Fermat's
 reflected pass, code that includes it), the area-light methods their polygons through ``arealight.frag``, and
@@ -6,7 +6,8 @@ there ``shaders/shadows.glsl`` weights each light by what its shadow views see:
 
 - a point light: six 90° perspective views (a cube map unfolded into the atlas: faces +x, −x, +y, −y, +z, −z,
   picked by the major axis of the light-to-point vector); a directional light: one orthographic view fitted to
-  the meshes' bounding sphere; percentage-closer filtering (3 × 3 hardware-bilinear comparisons one texel
+  the meshes' bounding sphere, preceded by cascades over the camera's view when that view is coarser than a
+  pixel (``cascade_spheres``); percentage-closer filtering (3 × 3 hardware-bilinear comparisons one texel
   apart);
 - a quad / polygon light: **soft shadows by the ratio estimator** (Heitz et al. 2018) with shadow maps for
   visibility: ``SOFT_SIDE``² points spread over the emitter by the midpoint rule (the forward pass's sample
@@ -17,7 +18,10 @@ there ``shaders/shadows.glsl`` weights each light by what its shadow views see:
   comparison in view k. Exact where the light is wholly seen or wholly hidden; in the penumbra a quadrature
   of the visible fraction with ``SOFT_SIDE``² nodes. Directions more than ``MAX_ANGLE`` from the emitting
   normal fall outside the views and count as visible (their cosθ_y < 0.18);
-- views are drawn once per prepare (they depend on the lights and the meshes, not on the camera);
+- the environment: ``ENV_SAMPLES`` orthographic views along directions drawn ∝ the map's power (the shader
+  reads them from uniforms: ``environment_uniforms``);
+- views are drawn once per prepare (they depend on the lights and the meshes), but for the cascades, drawn
+  again by ``set_camera``;
 - bias, chosen on the test scenes (``tests/techniques/test_shadows.py``): a slope-scaled polygon offset in the
   depth pass (``SLOPE_BIAS``, ``CONSTANT_BIAS``) and, at lookup, a normal offset of 0.5 + 1.5 sin θ texels
   (θ between the normal and the light) along the normal turned towards the light. No acne on lit surfaces
@@ -30,7 +34,8 @@ View record in the storage buffer (``RECORD`` vec4 each): [0..3] view-projection
 its corner, uv size), [5] (world texel size: per unit distance along the axis for a perspective view; near and
 far of a soft-shadow view, 0),
 [6] sample point y and its weight dA × mask, [7] the view's axis (the emitting normal, or its opposite); an
-environment view: [6] its direction and weight, [7] its weight per channel.
+environment view: [6] its direction and weight, [7] its weight per channel (what ``environment_uniforms``
+packs for the shader).
 """
 
 from __future__ import annotations

@@ -217,8 +217,10 @@ class Panels:
             if changed:
                 self._events.append(event(field, new))
             return
-        if isinstance(value, int | float):
-            _, new = imgui.drag_float(label, float(shown), max(abs(float(value)), 0.01) * 0.005, 0.0, 0.0, "%.4g")
+        if isinstance(value, int):
+            _, new = imgui.drag_int(label, int(shown), 1.0)
+        elif isinstance(value, float):
+            _, new = imgui.drag_float(label, float(shown), max(abs(value), 0.01) * 0.005, 0.0, 0.0, "%.4g")
         elif _is_vec3(value):
             if field in COLOURS:
                 _, new = imgui.color_edit3(label, list(shown), imgui.ColorEditFlags_.hdr | imgui.ColorEditFlags_.float)
@@ -251,10 +253,10 @@ def _is_vec3(value) -> bool:
 
 
 def _plain(value):
-    """Widget values as scene values (lists of floats)."""
+    """Widget values as scene values (lists of floats; integers stay integers)."""
     if isinstance(value, list | tuple):
         return [_plain(v) for v in value]
-    return float(value)
+    return value if isinstance(value, int) else float(value)
 
 
 def _differs(a, b) -> bool:
