@@ -94,6 +94,18 @@ def cmd_view(args) -> int:
     return 0
 
 
+def cmd_highlights(args) -> int:
+    from .arguments import as_scene
+    from .editing.highlights import mesh_highlights, write_highlights
+
+    scene = as_scene(args.scene)
+    result = mesh_highlights(scene, args.mesh, light=args.light)
+    out = write_highlights(args.output, result)
+    n, bad = len(result["ell"]), int(result["degenerate"].sum())
+    print(f"wrote {out}: ℓ at {n} vertices of mesh[{args.mesh}] ({bad} degenerate: critical points or regions)")
+    return 0
+
+
 def cmd_reference(args) -> int:
     from .arguments import as_scene
     from .imageio import check_output_path, write_image
@@ -327,6 +339,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--exposure", type=float, default=0.0, help="exposure in stops (default 0)")
     p.add_argument("--tonemap", choices=["srgb", "aces"], default="srgb", help="tone curve (default srgb)")
     p.set_defaults(func=cmd_view)
+
+    p = sub.add_parser("highlights", help="potential highlight curves of a mesh's orientation field (ℓ per vertex)")
+    p.add_argument("scene", help="scene file (.toml)")
+    p.add_argument("--mesh", type=int, required=True, help="index of the mesh in the scene")
+    p.add_argument("--light", type=int, help="index of the point or directional light (default: the first)")
+    p.add_argument("-o", "--output", required=True, help="output .npz: positions, normals, u, h, ell, degenerate")
+    p.set_defaults(func=cmd_highlights)
 
     p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
     p.add_argument("scene", help="scene file (.toml)")
