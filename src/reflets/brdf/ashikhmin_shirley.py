@@ -10,6 +10,7 @@ from pydantic import Field
 from .base import (
     HalfVectorLobeMixture,
     Material,
+    Oriented,
     Reflectance,
     luminance,
     register_material,
@@ -41,7 +42,7 @@ def grazing_falloff(cos: np.ndarray) -> np.ndarray:
 
 
 @register_material
-class AshikhminShirley(HalfVectorLobeMixture, Material):
+class AshikhminShirley(HalfVectorLobeMixture, Oriented, Material):
     """Ashikhmin & Shirley 2000, "An anisotropic Phong BRDF model": Fresnel-weighted anisotropic Phong
     lobe (exponent n_u along the tangent, local x; n_v along y) plus a coupled, non-Lambertian diffuse term.
 

@@ -18,6 +18,7 @@ NumPy interface (vectorised over leading axes, float64):
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Annotated, ClassVar
 
 import numpy as np
@@ -33,6 +34,16 @@ NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 Reflectance = tuple[Unit, Unit, Unit]
 #: an RGB scale factor ≥ 0 per channel
 RGB = tuple[NonNeg, NonNeg, NonNeg]
+
+
+class Oriented(BaseModel):
+    """An anisotropic material's optional orientation field (001, chapter 4: what highlight editing solves for):
+    ``orientation = "field.npz"`` holds ``u`` (V, 3), one tangent per vertex of every mesh of the material in
+    that mesh's own vertex order (a file's), in the mesh's own coordinates (its transform moves it). It
+    replaces the meshes' tangents (the direction of increasing u), projected on the tangent planes, for every
+    technique and the references (``scene.geometry.mesh_data``)."""
+
+    orientation: Path | None = Field(None, description="per-vertex tangent field (.npz, key u, (V, 3))")
 
 
 class Material(BaseModel):

@@ -21,6 +21,7 @@ from ..fresnel import GOLD_ETA, GOLD_K, fresnel_conductor, fresnel_dielectric, f
 from .base import (
     RGB,
     Material,
+    Oriented,
     Reflectance,
     blinn_phong_exponent,
     finish_sample,
@@ -187,7 +188,7 @@ Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 
 
 @register_material
-class Microfacet(Material):
+class Microfacet(Oriented, Material):
     """Cook–Torrance microfacet reflection: an optional Lambertian term plus a rough specular lobe,
 
     f = diffuse/π + specular · F(wi·h) · D(h) · G(wo, wi) / (4 cosθo cosθi),  h = normalize(wo + wi),

@@ -10,6 +10,7 @@ from pydantic import Field
 from .base import (
     HalfVectorLobeMixture,
     Material,
+    Oriented,
     Reflectance,
     blinn_phong_exponent,
     luminance,
@@ -27,7 +28,7 @@ def slope_exponent(u: np.ndarray, ax: float, ay: float) -> np.ndarray:
 
 
 @register_material
-class Ward(HalfVectorLobeMixture, Material):
+class Ward(HalfVectorLobeMixture, Oriented, Material):
     """Diffuse + anisotropic Ward specular lobe; roughness α_x along the tangent (local x), α_y along y.
 
     Parameters

@@ -44,6 +44,13 @@ def _mesh_key(scene: Scene, index: int) -> tuple | None:
             except OSError:
                 return None  # let the build report the missing file
             files.append((str(scene.resolve(path)), stat.st_size, stat.st_mtime_ns))
+    orientation = getattr(scene.materials[mesh.material], "orientation", None)
+    if orientation is not None:  # the material's field replaces the tangents
+        try:
+            stat = scene.resolve(orientation).stat()
+        except OSError:
+            return None
+        files.append((str(scene.resolve(orientation)), stat.st_size, stat.st_mtime_ns))
     return (mesh.model_dump_json(exclude={"name", "material", "reflector"}), tuple(files))
 
 
@@ -64,6 +71,12 @@ def _build_mesh_data(scene: Scene, index: int) -> MeshData:
         raise SceneError(
             exc.message, file=exc.file, field=f"mesh[{index}]" + (f".{exc.field}" if exc.field else "")
         ) from None
+    orientation = getattr(scene.materials[mesh.material], "orientation", None)
+    if orientation is not None:  # in the mesh's own coordinates: the transform below moves it with the mesh
+        from .orientation import apply_orientation, load_orientation
+
+        field = f"materials.{mesh.material}.orientation (mesh[{index}])"
+        local = apply_orientation(local, load_orientation(scene.resolve(orientation), local.n_vertices, field))
     return local.transformed(mesh.transform.matrix())
 
 

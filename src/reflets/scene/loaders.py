@@ -59,6 +59,13 @@ def _check_files(scene: Scene, source) -> None:
                 material.load()
             except SceneError as exc:
                 raise SceneError(exc.message, file=exc.file, field=f"materials.{name}.file") from None
+        orientation = getattr(material, "orientation", None)
+        if orientation is not None and not scene.resolve(orientation).is_file():
+            raise SceneError(
+                f"orientation field not found: {scene.resolve(orientation)}",
+                file=source,
+                field=f"materials.{name}.orientation",
+            )
     for i, mesh in enumerate(scene.mesh):
         if isinstance(mesh, FileMesh) and not scene.resolve(mesh.file).is_file():
             raise SceneError(f"mesh file not found: {scene.resolve(mesh.file)}", file=source, field=f"mesh[{i}].file")

@@ -44,7 +44,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from ..brdf.ashikhmin_shirley import AshikhminShirley
-from ..brdf.base import LIGHT_TYPES, RGB, Material, register_material
+from ..brdf.base import LIGHT_TYPES, RGB, Material, Oriented, register_material
 from ..brdf.blinn_phong import BlinnPhong
 from ..brdf.lafortune import Lafortune
 from ..brdf.lambert import Lambert
@@ -109,7 +109,7 @@ class _GlslPath:
 
 
 @register_material
-class Scratched(Material):
+class Scratched(Oriented, Material):
     """Layered scratched SV-BRDF (chapter 3 of the scratches document; docs/techniques/scratches.md).
 
     A base BRDF covered by K layers of parallel scratches whose profile BRDF is precomputed by the 2D tracer.
