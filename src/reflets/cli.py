@@ -106,6 +106,25 @@ def cmd_highlights(args) -> int:
     return 0
 
 
+def cmd_edit_highlights(args) -> int:
+    from .arguments import as_scene
+    from .editing.highlights import edit_highlights, write_highlights
+
+    scene = as_scene(args.scene)
+    try:
+        with np.load(args.targets) as data:
+            targets, mask = data["ell"], data["mask"]
+    except FileNotFoundError:
+        raise ArgumentError("file not found", file=args.targets, field="--targets") from None
+    except (OSError, ValueError, KeyError) as exc:
+        raise ArgumentError(f"not an .npz with 'ell' and 'mask' ({exc})", file=args.targets) from None
+    result = edit_highlights(scene, args.mesh, targets, mask, light=args.light, iterations=args.iterations)
+    out = write_highlights(args.output, result)
+    energy = result["energy"]
+    print(f"wrote {out}: {len(energy) - 1} iterations, tensor energy {energy[0]:.3e} → {energy[-1]:.3e}")
+    return 0
+
+
 def cmd_reference(args) -> int:
     from .arguments import as_scene
     from .imageio import check_output_path, write_image
@@ -346,6 +365,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--light", type=int, help="index of the point or directional light (default: the first)")
     p.add_argument("-o", "--output", required=True, help="output .npz: positions, normals, u, h, ell, degenerate")
     p.set_defaults(func=cmd_highlights)
+
+    p = sub.add_parser("edit-highlights", help="solve a mesh's orientation field for target highlight tangents")
+    p.add_argument("scene", help="scene file (.toml)")
+    p.add_argument("--mesh", type=int, required=True, help="index of the mesh in the scene")
+    p.add_argument("--targets", required=True, help=".npz: ell (V, 3; zero rows: no target) and mask (V,) bool")
+    p.add_argument("--light", type=int, help="index of the point or directional light (default: the first)")
+    p.add_argument("--iterations", type=int, default=20, help="Levenberg–Marquardt iterations at most (20)")
+    p.add_argument("-o", "--output", required=True, help="output .npz: u (V, 3, the mesh's coordinates), energy")
+    p.set_defaults(func=cmd_edit_highlights)
 
     p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
     p.add_argument("scene", help="scene file (.toml)")

@@ -23,11 +23,8 @@ def weld(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return positions[first], inverse[faces], inverse
 
 
-def mesh_highlights(scene, index: int, light: int | None = None, k: int = 2) -> dict[str, np.ndarray]:
-    """For ``scene.mesh[index]`` in its vertex order (a file's, for a mesh file): world ``positions``,
-    ``normals``, the field ``u``, the half vectors ``h`` between the camera and the light (the first point or
-    directional light, or ``light``), ``ell`` (zero where degenerate) and ``degenerate``. k = 2: the field is
-    unoriented (every anisotropic BRDF of the library is centrally symmetric)."""
+def _prepared(scene, index: int, light: int | None):
+    """(mesh data, welded surface, the welded index of each vertex, half vectors, the field's tangents)."""
     from ..scene.geometry import mesh_data
 
     if not 0 <= index < len(scene.mesh):
@@ -53,6 +50,15 @@ def mesh_highlights(scene, index: int, light: int | None = None, k: int = 2) -> 
         light_position=getattr(source, "position", None),
         light_direction=getattr(source, "direction", None),
     )
+    return data, mesh, inverse, h, u
+
+
+def mesh_highlights(scene, index: int, light: int | None = None, k: int = 2) -> dict[str, np.ndarray]:
+    """For ``scene.mesh[index]`` in its vertex order (a file's, for a mesh file): world ``positions``,
+    ``normals``, the field ``u``, the half vectors ``h`` between the camera and the light (the first point or
+    directional light, or ``light``), ``ell`` (zero where degenerate) and ``degenerate``. k = 2: the field is
+    unoriented (every anisotropic BRDF of the library is centrally symmetric)."""
+    data, mesh, inverse, h, u = _prepared(scene, index, light)
     ell, degenerate = highlight_tangents(mesh, mesh.angles(u), h, k)
     ell[degenerate] = 0.0
     return {
@@ -63,6 +69,36 @@ def mesh_highlights(scene, index: int, light: int | None = None, k: int = 2) -> 
         "ell": ell[inverse],
         "degenerate": degenerate[inverse],
     }
+
+
+def edit_highlights(
+    scene, index: int, targets: np.ndarray, mask: np.ndarray, light: int | None = None, k: int = 2, iterations: int = 20
+) -> dict[str, np.ndarray]:
+    """Solve the orientation field of ``scene.mesh[index]`` on the ``mask`` vertices (V,) so that its highlight
+    tangents match ``targets`` (V, 3, world space as ``mesh_highlights`` writes them; zero rows: no target),
+    starting from the mesh's current field. Returns ``u`` (V, 3) in the mesh's own coordinates and vertex order
+    (what a material's ``orientation`` file holds) and ``energy`` (the start, then each iteration)."""
+    from .solver import HighlightProblem, solve
+
+    data, mesh, inverse, h, u = _prepared(scene, index, light)
+    count = data.n_vertices
+    targets, mask = np.asarray(targets, np.float64), np.asarray(mask, bool)
+    if targets.shape != (count, 3) or mask.shape != (count,):
+        raise ArgumentError(
+            f"targets need ell ({count}, 3) and mask ({count},), one row per vertex of mesh[{index}]; got "
+            f"{targets.shape} and {mask.shape}",
+            field="--targets",
+        )
+    welded_targets = np.zeros_like(mesh.positions)
+    welded_targets[inverse] = targets
+    free = np.zeros(len(mesh.positions), bool)
+    np.logical_or.at(free, inverse, mask)
+    result = solve(HighlightProblem(mesh, h, k), mesh.angles(u), welded_targets, free, iterations=iterations)
+    world = mesh.field(result.phi)[inverse]
+    linear = scene.mesh[index].transform.matrix()[:3, :3]
+    local = world @ np.linalg.inv(linear).T  # tangents move by M: back to the mesh's own coordinates
+    local /= np.maximum(np.linalg.norm(local, axis=1, keepdims=True), 1e-300)
+    return {"u": local, "energy": np.asarray(result.energy)}
 
 
 def write_highlights(path: str | Path, result: dict[str, np.ndarray]) -> Path:

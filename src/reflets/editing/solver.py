@@ -1,0 +1,196 @@
+"""The orientation-field solver of 001 §4.2.4: find the angles φ of the field on the brush's vertices whose
+highlight tangents ℓ (eq 4.10) match targets ℓ*, by Levenberg–Marquardt on the tensor energy of eq 4.5 with an
+analytic sparse Jacobian (each ℓ_i depends on φ over i's 1-ring), Laplacian smoothing of φ after each step.
+
+The tensor energy removes ℓ's sign: with L = ℓℓᵀ / |ℓ|² and θ the angle of ℓ in the tangent plane,
+‖L − L*‖² = ½ |e^{2iθ} − e^{2iθ*}|², so a vertex contributes the two residuals √(A/2) (cos 2θ − cos 2θ*,
+sin 2θ − sin 2θ*) [eq 4.11 squares inside the residual: erratum]. Residual vertices: those with a target, and
+the brush's 1-ring neighbours without one (their current ℓ is their target: a stroke does not disturb what
+surrounds it); degenerate vertices (critical points, ℓ = 0) have none. The loop stops when the energy falls
+below ``tolerance`` × its start [the thesis prints the test reversed: erratum], or after ``iterations``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .analysis import CRITICAL_COSINE, weingarten, wrap
+from .surface import SurfaceMesh
+
+#: weight of the Laplacian smoothing step applied to the free angles after each accepted LM step
+SMOOTHING = 0.1
+
+
+@dataclass
+class SolveResult:
+    """The solved angles, the energy before the first and after each iteration, and per-iteration timings."""
+
+    phi: np.ndarray
+    energy: list[float]
+    jacobian_ms: list[float] = field(default_factory=list)
+    solve_ms: list[float] = field(default_factory=list)
+
+
+class HighlightProblem:
+    """Everything about a mesh, a light and a view that the solver's iterations share (the Weingarten maps, the
+    regression weights of ∇φ, the half vectors in each vertex's frame)."""
+
+    def __init__(self, mesh: SurfaceMesh, h: np.ndarray, k: int = 2):
+        self.mesh, self.k = mesh, k
+        count = len(mesh.positions)
+        self.w = weingarten(mesh)
+        i = mesh.edges[:, 0]
+        x, _ = mesh.local(mesh.edges)
+        ata = np.zeros((count, 2, 2))
+        np.add.at(ata, i, x[:, :, None] * x[:, None, :])
+        ata += 1e-12 * np.trace(ata, axis1=1, axis2=2)[:, None, None] * np.eye(2) + 1e-300 * np.eye(2)
+        #: ∂∇φ_i / ∂φ_j for each 1-ring edge (i, j): (Σ x xᵀ)⁻¹ x_ij
+        self.c = np.einsum("eab,eb->ea", np.linalg.inv(ata)[i], x)
+        self.h_tb = np.stack([np.einsum("ij,ij->i", h, mesh.t), np.einsum("ij,ij->i", h, mesh.b)], axis=1)
+        self.h_n = np.einsum("ij,ij->i", h, mesh.normals)
+        self.critical = self.h_n > CRITICAL_COSINE
+
+    def gradient(self, phi: np.ndarray) -> np.ndarray:
+        """∇φ per vertex (V, 2), eq 4.13 with wrapped differences."""
+        i, j = self.mesh.edges[:, 0], self.mesh.edges[:, 1]
+        y = wrap(self.k * (phi[j] + self.mesh.transport - phi[i])) / self.k
+        grad = np.zeros((len(phi), 2))
+        np.add.at(grad, i, self.c * y[:, None])
+        return grad
+
+    def g(self, phi: np.ndarray, grad: np.ndarray | None = None) -> np.ndarray:
+        """g = ∇φ (v·h) + W ū (n·h), (V, 2): ℓ is g turned by 90° in the tangent plane (eq 4.10)."""
+        grad = self.gradient(phi) if grad is None else grad
+        u2 = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+        v2 = np.stack([-np.sin(phi), np.cos(phi)], axis=1)
+        a = np.einsum("ij,ij->i", v2, self.h_tb)
+        return grad * a[:, None] + np.einsum("vab,vb->va", self.w, u2) * self.h_n[:, None]
+
+    def angles(self, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """θ, the angle of ℓ in each vertex's (t, b) frame, and |ℓ|."""
+        g = self.g(phi)
+        return np.arctan2(g[:, 0], -g[:, 1]), np.linalg.norm(g, axis=1)
+
+    def jacobian(self, phi: np.ndarray, rows: np.ndarray, free_index: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
+        """dθ_i/dφ_m for the residual vertices ``rows`` and the free vertices (``free_index``: column of each
+        vertex, −1 if fixed), and θ at ``rows``."""
+        mesh, count = self.mesh, len(phi)
+        grad = self.gradient(phi)
+        g = self.g(phi, grad)
+        u2 = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+        v2 = np.stack([-np.sin(phi), np.cos(phi)], axis=1)
+        a = np.einsum("ij,ij->i", v2, self.h_tb)
+        da = -np.einsum("ij,ij->i", u2, self.h_tb)
+        size2 = np.maximum(np.einsum("ij,ij->i", g, g), 1e-300)
+        dtheta_dg = np.stack([-g[:, 1], g[:, 0]], axis=1) / size2[:, None]  # θ = angle(g) + 90°
+        i, j = mesh.edges[:, 0], mesh.edges[:, 1]
+        csum = np.zeros((count, 2))
+        np.add.at(csum, i, self.c)
+        dg_self = -csum * a[:, None] + grad * da[:, None] + np.einsum("vab,vb->va", self.w, v2) * self.h_n[:, None]
+        is_row = np.zeros(count, bool)
+        is_row[rows] = True
+        row_of = np.full(count, -1)
+        row_of[rows] = np.arange(len(rows))
+        entries_r, entries_c, values = [], [], []
+        own = is_row & (free_index >= 0)
+        entries_r.append(row_of[own])
+        entries_c.append(free_index[own])
+        values.append(np.einsum("ij,ij->i", dtheta_dg[own], dg_self[own]))
+        edge = is_row[i] & (free_index[j] >= 0)
+        entries_r.append(row_of[i[edge]])
+        entries_c.append(free_index[j[edge]])
+        values.append(np.einsum("ij,ij->i", dtheta_dg[i[edge]], self.c[edge]) * a[i[edge]])
+        n_free = int(free_index.max()) + 1 if (free_index >= 0).any() else 0
+        jac = sp.coo_matrix(
+            (np.concatenate(values), (np.concatenate(entries_r), np.concatenate(entries_c))), shape=(len(rows), n_free)
+        ).tocsr()
+        theta = np.arctan2(g[rows, 0], -g[rows, 1])
+        return theta, jac
+
+    def smooth(self, phi: np.ndarray, free: np.ndarray, weight: float = SMOOTHING) -> np.ndarray:
+        """One damped Laplacian step on the free angles (neighbours transported, k-fold wrapped)."""
+        i, j = self.mesh.edges[:, 0], self.mesh.edges[:, 1]
+        delta = wrap(self.k * (phi[j] + self.mesh.transport - phi[i])) / self.k
+        mean = np.bincount(i, delta, len(phi)) / np.maximum(np.bincount(i, minlength=len(phi)), 1)
+        return np.where(free, phi + weight * mean, phi)
+
+
+def target_angles(mesh: SurfaceMesh, ell: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """θ* of target tangents (V, 3) in each vertex's frame, and which rows hold a target (non-zero)."""
+    theta = np.arctan2(np.einsum("ij,ij->i", ell, mesh.b), np.einsum("ij,ij->i", ell, mesh.t))
+    return theta, np.linalg.norm(ell, axis=1) > 1e-12
+
+
+def solve(
+    problem: HighlightProblem,
+    phi0: np.ndarray,
+    targets: np.ndarray,
+    free: np.ndarray,
+    iterations: int = 20,
+    tolerance: float = 1e-8,
+    smoothing: float = SMOOTHING,
+) -> SolveResult:
+    """Angles φ (only ``free`` vertices change) whose ℓ match ``targets`` (V, 3; zero rows: no target)."""
+    mesh = problem.mesh
+    phi = np.asarray(phi0, np.float64).copy()
+    free = np.asarray(free, bool)
+    theta_star, has_target = target_angles(mesh, targets)
+    near = np.zeros(len(phi), bool)  # the brush and its 1-ring: where ℓ can change
+    near[mesh.edges[free[mesh.edges[:, 1]], 0]] = True
+    near |= free
+    current, size = problem.angles(phi)
+    keep = near & ~has_target  # no target given: keep the ℓ it has
+    theta_star = np.where(keep, current, theta_star)
+    rows = np.flatnonzero(near & (has_target | keep) & ~problem.critical & (size > 1e-12))
+    weights = np.sqrt(mesh.areas[rows] / 2.0)
+    free_index = np.full(len(phi), -1)
+    free_index[free] = np.arange(int(free.sum()))
+    c_star, s_star = np.cos(2 * theta_star[rows]), np.sin(2 * theta_star[rows])
+
+    def residuals(p):
+        theta, _ = problem.angles(p)
+        t = theta[rows]
+        return np.concatenate([weights * (np.cos(2 * t) - c_star), weights * (np.sin(2 * t) - s_star)])
+
+    r = residuals(phi)
+    result = SolveResult(phi, [float(r @ r)])
+    damping = 1e-3
+    for _ in range(iterations):
+        if not free.any() or result.energy[-1] <= tolerance * result.energy[0]:
+            break
+        start = time.perf_counter()
+        theta, dtheta = problem.jacobian(phi, rows, free_index)
+        d2 = 2.0 * weights[:, None]
+        jac = sp.vstack(
+            [sp.diags(-d2[:, 0] * np.sin(2 * theta)) @ dtheta, sp.diags(d2[:, 0] * np.cos(2 * theta)) @ dtheta]
+        )
+        jtj = (jac.T @ jac).tocsc()
+        jtr = jac.T @ r
+        result.jacobian_ms.append(1e3 * (time.perf_counter() - start))
+        start = time.perf_counter()
+        diag = sp.diags(jtj.diagonal() + 1e-12)
+        for _ in range(12):  # Levenberg–Marquardt: raise the damping until the step lowers the energy
+            step = spla.spsolve((jtj + damping * diag).tocsc(), -jtr)
+            trial = phi.copy()
+            trial[free] += step
+            r_trial = residuals(trial)
+            if r_trial @ r_trial < r @ r:
+                damping = max(damping / 3.0, 1e-9)
+                break
+            damping *= 5.0
+        else:
+            result.solve_ms.append(1e3 * (time.perf_counter() - start))
+            break  # no step lowers the energy: a (local) minimum
+        phi = problem.smooth(trial, free, smoothing) if smoothing > 0 else trial
+        r = residuals(phi)
+        if r @ r > r_trial @ r_trial * 1.5:  # smoothing that undoes the step: keep the step alone
+            phi, r = trial, r_trial
+        result.solve_ms.append(1e3 * (time.perf_counter() - start))
+        result.energy.append(float(r @ r))
+    result.phi = phi
+    return result
