@@ -26,6 +26,7 @@ SUITES: dict[str, str] = {
     "shadows": "reflets.bench.shadows:bench_shadows",
     "ibl": "reflets.bench.ibl:bench_ibl",
     "viewer": "reflets.bench.viewer:bench_viewer",
+    "editing": "reflets.bench.editing:bench_editing",
 }
 
 

@@ -55,67 +55,82 @@ class HighlightProblem:
         self.h_n = np.einsum("ij,ij->i", h, mesh.normals)
         self.critical = self.h_n > CRITICAL_COSINE
 
-    def gradient(self, phi: np.ndarray) -> np.ndarray:
-        """∇φ per vertex (V, 2), eq 4.13 with wrapped differences."""
-        i, j = self.mesh.edges[:, 0], self.mesh.edges[:, 1]
-        y = wrap(self.k * (phi[j] + self.mesh.transport - phi[i])) / self.k
+    def subset(self, rows: np.ndarray) -> np.ndarray:
+        """The 1-ring edges (i, j) with i in ``rows``: what ∇φ and ℓ at those vertices read."""
+        inside = np.zeros(len(self.mesh.positions), bool)
+        inside[rows] = True
+        return np.flatnonzero(inside[self.mesh.edges[:, 0]])
+
+    def gradient(self, phi: np.ndarray, edges: np.ndarray | None = None) -> np.ndarray:
+        """∇φ per vertex (V, 2), eq 4.13 with wrapped differences (only at the vertices of ``edges``' first
+        column when a subset is given; zero elsewhere)."""
+        sel = slice(None) if edges is None else edges
+        i, j = self.mesh.edges[sel, 0], self.mesh.edges[sel, 1]
+        y = wrap(self.k * (phi[j] + self.mesh.transport[sel] - phi[i])) / self.k
         grad = np.zeros((len(phi), 2))
-        np.add.at(grad, i, self.c * y[:, None])
+        np.add.at(grad, i, self.c[sel] * y[:, None])
         return grad
 
-    def g(self, phi: np.ndarray, grad: np.ndarray | None = None) -> np.ndarray:
-        """g = ∇φ (v·h) + W ū (n·h), (V, 2): ℓ is g turned by 90° in the tangent plane (eq 4.10)."""
+    def g(self, phi: np.ndarray, grad: np.ndarray | None = None, rows=slice(None)) -> np.ndarray:
+        """g = ∇φ (v·h) + W ū (n·h) at ``rows`` (ℓ is g turned by 90° in the tangent plane: eq 4.10)."""
         grad = self.gradient(phi) if grad is None else grad
-        u2 = np.stack([np.cos(phi), np.sin(phi)], axis=1)
-        v2 = np.stack([-np.sin(phi), np.cos(phi)], axis=1)
-        a = np.einsum("ij,ij->i", v2, self.h_tb)
-        return grad * a[:, None] + np.einsum("vab,vb->va", self.w, u2) * self.h_n[:, None]
+        p = phi[rows]
+        u2 = np.stack([np.cos(p), np.sin(p)], axis=1)
+        v2 = np.stack([-np.sin(p), np.cos(p)], axis=1)
+        a = np.einsum("ij,ij->i", v2, self.h_tb[rows])
+        return grad[rows] * a[:, None] + np.einsum("vab,vb->va", self.w[rows], u2) * self.h_n[rows][:, None]
 
-    def angles(self, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """θ, the angle of ℓ in each vertex's (t, b) frame, and |ℓ|."""
-        g = self.g(phi)
+    def angles(
+        self, phi: np.ndarray, rows=slice(None), edges: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """θ, the angle of ℓ in each vertex's (t, b) frame, and |ℓ|, at ``rows`` (``edges``: their subset)."""
+        g = self.g(phi, self.gradient(phi, edges), rows)
         return np.arctan2(g[:, 0], -g[:, 1]), np.linalg.norm(g, axis=1)
 
-    def jacobian(self, phi: np.ndarray, rows: np.ndarray, free_index: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
-        """dθ_i/dφ_m for the residual vertices ``rows`` and the free vertices (``free_index``: column of each
-        vertex, −1 if fixed), and θ at ``rows``."""
+    def jacobian(
+        self, phi: np.ndarray, rows: np.ndarray, free_index: np.ndarray, edges: np.ndarray
+    ) -> tuple[np.ndarray, sp.csr_matrix]:
+        """dθ_i/dφ_m for the residual vertices ``rows`` (``edges``: their 1-ring edges) and the free vertices
+        (``free_index``: the column of each vertex, −1 if fixed), and θ at ``rows``."""
         mesh, count = self.mesh, len(phi)
-        grad = self.gradient(phi)
-        g = self.g(phi, grad)
-        u2 = np.stack([np.cos(phi), np.sin(phi)], axis=1)
-        v2 = np.stack([-np.sin(phi), np.cos(phi)], axis=1)
-        a = np.einsum("ij,ij->i", v2, self.h_tb)
-        da = -np.einsum("ij,ij->i", u2, self.h_tb)
+        grad = self.gradient(phi, edges)
+        g = self.g(phi, grad, rows)
+        p = phi[rows]
+        u2 = np.stack([np.cos(p), np.sin(p)], axis=1)
+        v2 = np.stack([-np.sin(p), np.cos(p)], axis=1)
+        h_tb = self.h_tb[rows]
+        a = np.einsum("ij,ij->i", v2, h_tb)
+        da = -np.einsum("ij,ij->i", u2, h_tb)
         size2 = np.maximum(np.einsum("ij,ij->i", g, g), 1e-300)
         dtheta_dg = np.stack([-g[:, 1], g[:, 0]], axis=1) / size2[:, None]  # θ = angle(g) + 90°
-        i, j = mesh.edges[:, 0], mesh.edges[:, 1]
-        csum = np.zeros((count, 2))
-        np.add.at(csum, i, self.c)
-        dg_self = -csum * a[:, None] + grad * da[:, None] + np.einsum("vab,vb->va", self.w, v2) * self.h_n[:, None]
-        is_row = np.zeros(count, bool)
-        is_row[rows] = True
         row_of = np.full(count, -1)
         row_of[rows] = np.arange(len(rows))
-        entries_r, entries_c, values = [], [], []
-        own = is_row & (free_index >= 0)
-        entries_r.append(row_of[own])
-        entries_c.append(free_index[own])
-        values.append(np.einsum("ij,ij->i", dtheta_dg[own], dg_self[own]))
-        edge = is_row[i] & (free_index[j] >= 0)
-        entries_r.append(row_of[i[edge]])
-        entries_c.append(free_index[j[edge]])
-        values.append(np.einsum("ij,ij->i", dtheta_dg[i[edge]], self.c[edge]) * a[i[edge]])
+        i, j = mesh.edges[edges, 0], mesh.edges[edges, 1]
+        c = self.c[edges]
+        csum = np.zeros((len(rows), 2))
+        np.add.at(csum, row_of[i], c)
+        dg_self = -csum * a[:, None] + grad[rows] * da[:, None]
+        dg_self += np.einsum("vab,vb->va", self.w[rows], v2) * self.h_n[rows][:, None]
+        own = free_index[rows] >= 0
+        edge = free_index[j] >= 0
+        r_i = row_of[i[edge]]
+        entries_r = np.concatenate([np.flatnonzero(own), r_i])
+        entries_c = np.concatenate([free_index[rows][own], free_index[j[edge]]])
+        values = np.concatenate(
+            [
+                np.einsum("ij,ij->i", dtheta_dg[own], dg_self[own]),
+                np.einsum("ij,ij->i", dtheta_dg[r_i], c[edge]) * a[r_i],
+            ]
+        )
         n_free = int(free_index.max()) + 1 if (free_index >= 0).any() else 0
-        jac = sp.coo_matrix(
-            (np.concatenate(values), (np.concatenate(entries_r), np.concatenate(entries_c))), shape=(len(rows), n_free)
-        ).tocsr()
-        theta = np.arctan2(g[rows, 0], -g[rows, 1])
-        return theta, jac
+        jac = sp.coo_matrix((values, (entries_r, entries_c)), shape=(len(rows), n_free)).tocsr()
+        return np.arctan2(g[:, 0], -g[:, 1]), jac
 
-    def smooth(self, phi: np.ndarray, free: np.ndarray, weight: float = SMOOTHING) -> np.ndarray:
-        """One damped Laplacian step on the free angles (neighbours transported, k-fold wrapped)."""
-        i, j = self.mesh.edges[:, 0], self.mesh.edges[:, 1]
-        delta = wrap(self.k * (phi[j] + self.mesh.transport - phi[i])) / self.k
+    def smooth(self, phi: np.ndarray, free: np.ndarray, edges: np.ndarray, weight: float = SMOOTHING) -> np.ndarray:
+        """One damped Laplacian step on the free angles (``edges``: their 1-ring edges; neighbours transported,
+        k-fold wrapped)."""
+        i, j = self.mesh.edges[edges, 0], self.mesh.edges[edges, 1]
+        delta = wrap(self.k * (phi[j] + self.mesh.transport[edges] - phi[i])) / self.k
         mean = np.bincount(i, delta, len(phi)) / np.maximum(np.bincount(i, minlength=len(phi)), 1)
         return np.where(free, phi + weight * mean, phi)
 
@@ -143,18 +158,21 @@ def solve(
     near = np.zeros(len(phi), bool)  # the brush and its 1-ring: where ℓ can change
     near[mesh.edges[free[mesh.edges[:, 1]], 0]] = True
     near |= free
-    current, size = problem.angles(phi)
-    keep = near & ~has_target  # no target given: keep the ℓ it has
-    theta_star = np.where(keep, current, theta_star)
-    rows = np.flatnonzero(near & (has_target | keep) & ~problem.critical & (size > 1e-12))
+    candidates = np.flatnonzero(near)
+    current, size = problem.angles(phi, candidates, problem.subset(candidates))
+    keep = ~has_target[candidates]  # no target given: keep the ℓ it has
+    theta_star = np.where(keep, current, theta_star[candidates])
+    use = (has_target[candidates] | keep) & ~problem.critical[candidates] & (size > 1e-12)
+    rows, theta_star = candidates[use], theta_star[use]
+    edges = problem.subset(rows)  # every iteration reads only the brush and its 1-ring
+    free_edges = problem.subset(np.flatnonzero(free))
     weights = np.sqrt(mesh.areas[rows] / 2.0)
     free_index = np.full(len(phi), -1)
     free_index[free] = np.arange(int(free.sum()))
-    c_star, s_star = np.cos(2 * theta_star[rows]), np.sin(2 * theta_star[rows])
+    c_star, s_star = np.cos(2 * theta_star), np.sin(2 * theta_star)
 
     def residuals(p):
-        theta, _ = problem.angles(p)
-        t = theta[rows]
+        t, _ = problem.angles(p, rows, edges)
         return np.concatenate([weights * (np.cos(2 * t) - c_star), weights * (np.sin(2 * t) - s_star)])
 
     r = residuals(phi)
@@ -164,7 +182,7 @@ def solve(
         if not free.any() or result.energy[-1] <= tolerance * result.energy[0]:
             break
         start = time.perf_counter()
-        theta, dtheta = problem.jacobian(phi, rows, free_index)
+        theta, dtheta = problem.jacobian(phi, rows, free_index, edges)
         d2 = 2.0 * weights[:, None]
         jac = sp.vstack(
             [sp.diags(-d2[:, 0] * np.sin(2 * theta)) @ dtheta, sp.diags(d2[:, 0] * np.cos(2 * theta)) @ dtheta]
@@ -186,7 +204,7 @@ def solve(
         else:
             result.solve_ms.append(1e3 * (time.perf_counter() - start))
             break  # no step lowers the energy: a (local) minimum
-        phi = problem.smooth(trial, free, smoothing) if smoothing > 0 else trial
+        phi = problem.smooth(trial, free, free_edges, smoothing) if smoothing > 0 else trial
         r = residuals(phi)
         if r @ r > r_trial @ r_trial * 1.5:  # smoothing that undoes the step: keep the step alone
             phi, r = trial, r_trial
