@@ -1,0 +1,108 @@
+"""The editing tools of 001 §4.3 that deform highlights by warping the brush: bend and expand. A brush is a
+disc on the surface (centre, radius, stroke direction); its vertices get a planar parameterisation (the tangent
+plane at the centre, scaled to the unit disc, y along the stroke), a warp W moves the highlight pattern inside
+it, and the targets are ℓ*_i = J_W(q) ℓ(q) with q = W⁻¹(p_i) (the original ℓ carried along by the warp). The
+warps vanish with their derivatives on the brush's boundary (falloff w = (1 − x² − y²)²), so targets there are
+the original ℓ: the highlight enters and leaves the brush where it did.
+
+- bend: W(x, y) = (x, y + w/2);
+- expand: W(x, y) = (x, y + w sign(y) √|sin y| / 2) [erratum: the document's √(sin y) is undefined for y < 0].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import LinearNDInterpolator
+
+from .surface import SurfaceMesh
+
+
+@dataclass
+class Brush:
+    """A disc on the surface: its centre (a point near the mesh), radius, and stroke direction (the y axis of
+    its parameterisation; projected on the tangent plane at the vertex nearest the centre)."""
+
+    centre: np.ndarray
+    radius: float
+    stroke: np.ndarray
+
+    def frame(self, mesh: SurfaceMesh) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(origin, x axis, y axis, normal) of the brush's plane."""
+        nearest = int(np.argmin(np.linalg.norm(mesh.positions - np.asarray(self.centre), axis=1)))
+        n = mesh.normals[nearest]
+        y = np.asarray(self.stroke, np.float64) - np.dot(self.stroke, n) * n
+        y /= np.linalg.norm(y)
+        return mesh.positions[nearest], np.cross(y, n), y, n
+
+    def coordinates(self, mesh: SurfaceMesh, margin: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+        """The vertices within ``margin`` × radius of the centre, and their (x, y) in the unit-disc plane."""
+        origin, ex, ey, _ = self.frame(mesh)
+        d = mesh.positions - origin
+        xy = np.stack([d @ ex, d @ ey], axis=1) / self.radius
+        inside = np.linalg.norm(d, axis=1) < margin * self.radius
+        return inside, xy
+
+
+def falloff(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """w = (1 − x² − y²)² inside the unit disc (0 outside), and its derivatives ∂w/∂x, ∂w/∂y."""
+    s = np.clip(1.0 - x * x - y * y, 0.0, None)
+    return s * s, -4.0 * x * s, -4.0 * y * s
+
+
+def bend(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The bend warp's vertical offset f (W = (x, y + f)) and ∂f/∂x, ∂f/∂y."""
+    w, wx, wy = falloff(x, y)
+    return 0.5 * w, 0.5 * wx, 0.5 * wy
+
+
+def expand(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The expand warp's offset f = w sign(y) √|sin y| / 2, and its derivatives (∂/∂y infinite at y = 0:
+    clipped, the pattern tears open along the stroke's axis there)."""
+    w, wx, wy = falloff(x, y)
+    g = np.sign(y) * np.sqrt(np.abs(np.sin(y)))
+    dg = 0.5 * np.cos(y) / np.maximum(np.sqrt(np.abs(np.sin(y))), 1e-6)
+    return 0.5 * w * g, 0.5 * wx * g, 0.5 * (wy * g + w * dg)
+
+
+WARPS = {"bend": bend, "expand": expand}
+
+
+def _inverse(warp, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """q_y with q_y + f(x, q_y) = y (x is kept): bisection (the warps are monotonic in y)."""
+    lo, hi = np.full_like(y, -2.0), np.full_like(y, 2.0)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        above = mid + warp(x, mid)[0] > y
+        hi, lo = np.where(above, mid, hi), np.where(above, lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def warp_targets(mesh: SurfaceMesh, ell: np.ndarray, brush: Brush, warp: str = "bend") -> tuple[np.ndarray, np.ndarray]:
+    """Targets ℓ* (V, 3; zero outside the brush) and the brush's vertices (V,) for warping the highlight
+    tangents ``ell`` (V, 3) by ``warp`` ("bend" or "expand")."""
+    f = WARPS[warp]
+    origin, ex, ey, _ = brush.frame(mesh)
+    support, xy = brush.coordinates(mesh, margin=1.5)  # ℓ is interpolated from a little beyond the brush
+    inside = support & (np.linalg.norm(xy, axis=1) < 1.0)
+    # ℓ in the brush's plane, by its doubled angle (ℓ and −ℓ are the same highlight), interpolated linearly
+    lx, ly = ell[support] @ ex, ell[support] @ ey
+    angle2 = 2.0 * np.arctan2(ly, lx)
+    interp = LinearNDInterpolator(xy[support], np.stack([np.cos(angle2), np.sin(angle2)], axis=1))
+    x, y = xy[inside, 0], xy[inside, 1]
+    qy = _inverse(f, x, y)
+    doubled = interp(np.stack([x, qy], axis=1))
+    theta = 0.5 * np.arctan2(doubled[:, 1], doubled[:, 0])
+    d = np.stack([np.cos(theta), np.sin(theta)], axis=1)
+    _, fx, fy = f(x, qy)
+    pushed = np.stack([d[:, 0], fx * d[:, 0] + (1.0 + fy) * d[:, 1]], axis=1)  # J_W(q) ℓ(q)
+    # back on each vertex's tangent plane by the inverse of the projection onto the brush's plane (the map the
+    # parameterisation used: a direction that the warp leaves alone comes back exactly)
+    t, b = mesh.t[inside], mesh.b[inside]
+    m = np.stack([np.stack([t @ ex, b @ ex], 1), np.stack([t @ ey, b @ ey], 1)], axis=1)  # P [t b], (N, 2, 2)
+    a = np.linalg.solve(m, pushed[..., None])[..., 0]
+    world = a[:, :1] * t + a[:, 1:] * b
+    targets = np.zeros_like(mesh.positions)
+    targets[inside] = world / np.maximum(np.linalg.norm(world, axis=1, keepdims=True), 1e-300)
+    return targets, inside
