@@ -111,6 +111,18 @@ def cmd_edit_highlights(args) -> int:
     from .editing.highlights import edit_highlights, write_highlights
 
     scene = as_scene(args.scene)
+    if (args.targets is None) == (args.strokes is None):
+        raise ArgumentError("give --targets (ℓ* and a mask) or --strokes (a scripted session), one of them")
+    if args.strokes is not None:
+        from .editing.strokes import apply_strokes, load_strokes
+
+        result = apply_strokes(
+            scene, args.mesh, load_strokes(args.strokes), light=args.light, iterations=args.iterations
+        )
+        out = write_highlights(args.output, result)
+        energies = ", ".join(f"{a:.2e} → {b:.2e}" for a, b in result["energy"])
+        print(f"wrote {out}: {len(result['energy'])} stroke(s), tensor energy {energies}")
+        return 0
     try:
         with np.load(args.targets) as data:
             targets, mask = data["ell"], data["mask"]
@@ -369,7 +381,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("edit-highlights", help="solve a mesh's orientation field for target highlight tangents")
     p.add_argument("scene", help="scene file (.toml)")
     p.add_argument("--mesh", type=int, required=True, help="index of the mesh in the scene")
-    p.add_argument("--targets", required=True, help=".npz: ell (V, 3; zero rows: no target) and mask (V,) bool")
+    p.add_argument("--targets", help=".npz: ell (V, 3; zero rows: no target) and mask (V,) bool")
+    p.add_argument(
+        "--strokes", help="JSON list of strokes (tool bend | expand, centre, radius, stroke) applied in turn"
+    )
     p.add_argument("--light", type=int, help="index of the point or directional light (default: the first)")
     p.add_argument("--iterations", type=int, default=20, help="Levenberg–Marquardt iterations at most (20)")
     p.add_argument("-o", "--output", required=True, help="output .npz: u (V, 3, the mesh's coordinates), energy")

@@ -96,6 +96,8 @@ DEMO: list[DemoEntry] = [
     DemoEntry("50_brushed_plate.toml", (Method("scratches", spp=128), Method("forward"))),
     DemoEntry("51_scratched_plate.toml", (Method("scratches", spp=64), Method("forward"))),
     DemoEntry("52_scratched_teapot.toml", (Method("scratches", spp=64), Method("forward"))),
+    DemoEntry("53_spun_plate.toml", reference=True, reference_spp=1),  # a point light: the reference is exact
+    DemoEntry("54_spun_plate_bent.toml", reference=True, reference_spp=1),
 ]
 
 

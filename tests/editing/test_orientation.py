@@ -93,3 +93,16 @@ def test_a_bad_field_names_the_file_and_the_material(tmp_path, u, message):
 def test_a_missing_field_file_is_an_error_when_the_scene_loads(tmp_path):
     with pytest.raises(SceneError, match="orientation field not found"):
         reflets.load_dict(plate(0.1, tmp_path / "missing.npz"))
+
+
+def test_a_vector_field_with_a_singularity_keeps_its_signs(tmp_path):
+    """Concentric circles about the plate's centre: only the edges around the centre disagree, the field is kept
+    as given (a sign walk would cut a seam from the singularity, a line of black pixels in a sharp lobe)."""
+    data = plate(0.1)
+    del data["mesh"][0]["transform"]  # the plate's own coordinates
+    p = mesh_data(reflets.load_dict(data), 0).positions.astype(np.float64)
+    u = np.stack([-p[:, 2], np.zeros(len(p)), p[:, 0]], axis=1) + [1e-3, 0, 0]
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    data["materials"]["brushed"]["orientation"] = str(field_file(tmp_path, u))
+    t = mesh_data(reflets.load_dict(data), 0).tangents[:, :3].astype(np.float64)
+    np.testing.assert_allclose(t, u, atol=1e-6)

@@ -63,3 +63,20 @@ def test_the_solver_follows_a_bend(sphere):
     # a warped pattern is not always the highlight of some field: the energy falls 5× (measured 6.9×), not to 0
     assert result.energy[-1] < 0.2 * result.energy[0]
     np.testing.assert_array_equal(result.phi[~inside], phi[~inside])
+
+
+def test_the_demo_s_scripted_bend_reproduces_its_shipped_field(tmp_path):
+    """data/strokes/spun_plate_bend.json through `reflets edit-highlights --strokes` gives the field the
+    gallery's 54_spun_plate_bent.toml ships (tools/make_highlight_edit.py wrote it), and the stroke's energy
+    falls over 100×."""
+    from reflets.cli import main
+    from reflets.demo import scene_path
+
+    data = scene_path("53_spun_plate.toml").parent.parent
+    out = tmp_path / "bent.npz"
+    strokes = data / "strokes" / "spun_plate_bend.json"
+    assert main(["edit-highlights", str(scene_path("53_spun_plate.toml")), "--mesh", "0", "--strokes", str(strokes),
+                 "-o", str(out)]) == 0  # fmt: skip
+    with np.load(out) as made, np.load(data / "fields" / "spun_plate_bent.npz") as shipped:
+        np.testing.assert_allclose(made["u"], shipped["u"], atol=1e-5)
+        assert made["energy"][0, 0] > 100 * made["energy"][0, 1]

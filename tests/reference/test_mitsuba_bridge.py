@@ -515,3 +515,18 @@ def test_a_light_without_shadows_is_refused_before_anything_is_written(tmp_path)
     with pytest.raises(SceneError, match=r"light\[0\]\.shadows.*NumPy reference|NumPy reference.*light\[0\]"):
         to_mitsuba_dict(scene, tmp_path / "work")
     assert not (tmp_path / "work").exists()
+
+
+def test_an_orientation_field_is_refused(tmp_path):
+    """Mitsuba takes tangents from the uv: a material oriented by a per-vertex field would be ignored silently."""
+    np.savez(tmp_path / "u.npz", u=np.zeros((4, 3)))
+    material = load_dict(
+        {
+            "camera": {"position": [0, 3, 4], "look_at": [0, 0, 0], "size": list(SIZE)},
+            "materials": {"m": {"type": "microfacet", "alpha": [0.1, 0.3], "orientation": str(tmp_path / "u.npz")}},
+            "mesh": [{"shape": "plane", "material": "m"}],
+            "light": [{"type": "point", "position": [0, 2, 0], "intensity": [1, 1, 1]}],
+        }
+    ).materials["m"]
+    with pytest.raises(SceneError, match="orientation field"):
+        material_to_mitsuba("m", material)

@@ -165,6 +165,8 @@ def _unsupported(name: str, kind: str, why: str) -> SceneError:
 def material_to_mitsuba(name: str, material) -> dict[str, Any]:
     """The Mitsuba BSDF dict (wrapped in ``twosided``) of one reflets material, or :class:`SceneError`."""
     kind = getattr(material, "type", type(material).__name__)
+    if getattr(material, "orientation", None) is not None:  # Mitsuba's tangents come from the uv, not ours
+        raise _unsupported(name, kind, "an orientation field (per-vertex tangents)")
     if kind == "lambert":
         inner = {"type": "diffuse", "reflectance": _rgb(material.albedo)}
     elif kind == "microfacet":

@@ -13,6 +13,9 @@ from scipy.sparse.csgraph import breadth_first_order
 from ..errors import SceneError
 from .meshdata import MeshData
 
+#: a field whose edges disagree in sign (t_i·t_j < 0) on at most this fraction is kept as given
+CONSISTENT_FRACTION = 0.02
+
 
 def load_orientation(path: Path, n_vertices: int, field: str) -> np.ndarray:
     """``u`` (V, 3) of an orientation file, checked: a readable .npz, key u, one finite row per vertex."""
@@ -50,17 +53,22 @@ def apply_orientation(data: MeshData, u: np.ndarray) -> MeshData:
 
 
 def _consistent_signs(t: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Signs flipped so that neighbours agree: a field that mostly does already (a vector field, whose
+    singularities alone have disagreeing edges) is kept as it is; otherwise each vertex, in breadth-first
+    order, takes the sign its already-signed neighbours vote for (Σ s_j t_i·t_j)."""
     count = len(t)
     pairs = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).astype(np.int64)
+    if np.mean(np.einsum("ij,ij->i", t[pairs[:, 0]], t[pairs[:, 1]]) < 0) <= CONSISTENT_FRACTION:
+        return t
     graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(count, count)).tocsr()
-    graph = graph + graph.T
+    graph = (graph + graph.T).tocsr()
     sign = np.zeros(count)
     for start in range(count):
         if sign[start]:
             continue
-        order, parent = breadth_first_order(graph, start, directed=False, return_predecessors=True)
-        sign[start] = 1.0
-        for v in order[1:]:  # parents come first in breadth-first order
-            p = parent[v]
-            sign[v] = sign[p] if np.dot(t[v], t[p]) >= 0 else -sign[p]
+        order = breadth_first_order(graph, start, directed=False, return_predecessors=False)
+        for v in order:
+            near = graph.indices[graph.indptr[v] : graph.indptr[v + 1]]
+            vote = float(np.dot(sign[near], t[near] @ t[v]))
+            sign[v] = 1.0 if vote >= 0 else -1.0
     return t * sign[:, None]
