@@ -80,3 +80,34 @@ def test_the_demo_s_scripted_bend_reproduces_its_shipped_field(tmp_path):
     with np.load(out) as made, np.load(data / "fields" / "spun_plate_bent.npz") as shipped:
         np.testing.assert_allclose(made["u"], shipped["u"], atol=1e-5)
         assert made["energy"][0, 0] > 100 * made["energy"][0, 1]
+
+
+def test_the_stencil_makes_a_highlight_region_inside_the_brush(sphere):
+    from reflets.editing.tools import stencil
+
+    mesh, phi, h, ell, degenerate = sphere
+    brush = Brush(centre=np.array([0.2, 0.35, 0.9]), radius=0.3, stroke=np.array([0.0, 1.0, 0.0]))
+    new = stencil(mesh, phi, h, brush)
+    near, xy = brush.coordinates(mesh, margin=1.5)
+    core = near & (np.linalg.norm(xy, axis=1) < 0.8)
+    u = mesh.field(new)
+    assert np.abs(np.einsum("ij,ij->i", h[core], u[core])).max() < 1e-9  # h·u = 0: the whole core highlights
+    far = ~near | (np.linalg.norm(xy, axis=1) > 1.2)
+    np.testing.assert_array_equal(new[far], phi[far])
+
+
+def test_the_light_tool_finds_the_light_that_draws_a_given_highlight(sphere):
+    """ℓ at a vertex under a known light: asked for that ℓ, the tool finds a light whose ℓ there matches
+    (within the search's step), the known light's direction among the candidates."""
+    from reflets.editing.tools import light_tool
+
+    mesh, phi, h, ell, degenerate = sphere
+    eye = np.array([0.5, 0.8, 4.0])
+    vertex = int(np.argmax(mesh.positions @ np.array([0.2, 0.35, 0.9])))
+    direction, error = light_tool(mesh, phi, vertex, ell[vertex], eye)
+    assert error < 0.5
+    assert direction @ mesh.normals[vertex] > np.pi / 8
+    # the half vector of the found light is perpendicular to u there: the vertex is on its highlight
+    out = (eye - mesh.positions[vertex]) / np.linalg.norm(eye - mesh.positions[vertex])
+    half = (out + direction) / np.linalg.norm(out + direction)
+    assert abs(half @ mesh.field(phi)[vertex]) < 1e-9

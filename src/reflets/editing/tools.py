@@ -106,3 +106,58 @@ def warp_targets(mesh: SurfaceMesh, ell: np.ndarray, brush: Brush, warp: str = "
     targets = np.zeros_like(mesh.positions)
     targets[inside] = world / np.maximum(np.linalg.norm(world, axis=1, keepdims=True), 1e-300)
     return targets, inside
+
+
+def stencil(mesh: SurfaceMesh, phi: np.ndarray, h: np.ndarray, brush: Brush, smoothing: int = 10) -> np.ndarray:
+    """The stencil (§4.3): inside the brush u = h × n (h·u = 0 everywhere: a highlight *region*, the shape of
+    the brush), then ``smoothing`` Laplacian steps on a band at the brush's border (the region is unstable
+    there: the field jumps from the stencil to the surrounding one). Returns the new angles."""
+    from .analysis import wrap
+
+    near, xy = brush.coordinates(mesh, margin=1.15)
+    r = np.linalg.norm(xy, axis=1)
+    inside = near & (r < 1.0)
+    u = np.cross(h, mesh.normals)
+    phi = phi.copy()
+    ok = inside & (np.linalg.norm(u, axis=1) > 1e-9)  # h ∥ n: a critical point, any u
+    phi[ok] = mesh.angles(u)[ok]
+    band = near & (r > 0.85) & (r < 1.15)
+    i, j = mesh.edges[:, 0], mesh.edges[:, 1]
+    for _ in range(smoothing):
+        delta = wrap(2.0 * (phi[j] + mesh.transport - phi[i])) / 2.0
+        mean = np.bincount(i, delta, len(phi)) / np.maximum(np.bincount(i, minlength=len(phi)), 1)
+        phi = np.where(band, phi + 0.5 * mean, phi)
+    return phi
+
+
+def light_tool(
+    mesh: SurfaceMesh, phi: np.ndarray, vertex: int, ell_target: np.ndarray, eye, samples: int = 721, k: int = 2
+) -> tuple[np.ndarray, float]:
+    """The light tool (§4.3): with the field fixed, the direction towards a light for which the highlight
+    through ``vertex`` runs along ``ell_target``. The half vectors with h·u = 0 form a one-parameter family
+    h(θ) = cos θ n + sin θ v; each gives an incoming direction ω_in = 2 (h·ω_out) h − ω_out, kept when
+    n·ω_in > ε (ε = π/8, the document's cosine threshold), and its ℓ (eq 4.10); the best match of an exhaustive
+    search wins. Returns (ω_in, the angle in degrees between its ℓ and the target)."""
+    from .analysis import phi_gradient, weingarten
+
+    n, u = mesh.normals[vertex], mesh.field(phi)[vertex]
+    v = np.cross(n, u)
+    out = np.asarray(eye, np.float64) - mesh.positions[vertex]
+    out /= np.linalg.norm(out)
+    theta = np.linspace(-np.pi / 2, np.pi / 2, samples)
+    h = np.cos(theta)[:, None] * n + np.sin(theta)[:, None] * v
+    incoming = 2.0 * (h @ out)[:, None] * h - out
+    valid = incoming @ n > np.pi / 8
+    if not valid.any():
+        raise ValueError("no light direction above the surface makes a highlight there from this view")
+    grad = phi_gradient(mesh, phi, k)[vertex]
+    w = weingarten(mesh)[vertex]
+    u2 = np.array([np.cos(phi[vertex]), np.sin(phi[vertex])])
+    hv, hn = h @ v, h @ n
+    g = grad[None, :] * hv[:, None] + (w @ u2)[None, :] * hn[:, None]
+    ell = g[:, :1] * mesh.b[vertex] - g[:, 1:] * mesh.t[vertex]
+    target = np.asarray(ell_target, np.float64)
+    cos = np.abs(ell @ target) / np.maximum(np.linalg.norm(ell, axis=1) * np.linalg.norm(target), 1e-300)
+    cos[~valid] = -1.0
+    best = int(np.argmax(cos))
+    return incoming[best], float(np.degrees(np.arccos(np.clip(cos[best], 0.0, 1.0))))
