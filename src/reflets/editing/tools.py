@@ -1,4 +1,5 @@
-"""The editing tools of 001 §4.3 that deform highlights by warping the brush: bend and expand. A brush is a
+"""The editing tools of 001 §4.3: bend and expand (warps of the highlight inside a brush, solved for by
+``solver.solve``), the stencil and the light tool (functions at the end). A brush is a
 disc on the surface (centre, radius, stroke direction); its vertices get a planar parameterisation (the tangent
 plane at the centre, scaled to the unit disc, y along the stroke), a warp W moves the highlight pattern inside
 it, and the targets are ℓ*_i = J_W(q) ℓ(q) with q = W⁻¹(p_i) (the original ℓ carried along by the warp). The
