@@ -42,24 +42,62 @@ def load_strokes(path: str | Path) -> list[dict]:
     return strokes
 
 
+class EditSession:
+    """A mesh's orientation field being edited stroke by stroke, with undo and redo: what a scripted session
+    and the viewer's paint mode drive. The camera and light of the scene it was made from fix h."""
+
+    def __init__(self, scene, index: int, light: int | None = None, k: int = 2, iterations: int = 20):
+        self.index, self.k, self.iterations = index, k, iterations
+        _, self.mesh, self.inverse, h, u = _prepared(scene, index, light)
+        self.problem = HighlightProblem(self.mesh, h, k)
+        self.h = h
+        self.linear = scene.mesh[index].transform.matrix()[:3, :3]
+        self.history = [self.mesh.angles(u)]  # φ after each stroke, the start first
+        self.future: list[np.ndarray] = []
+        self.energies: list[tuple[float, float]] = []
+
+    @property
+    def phi(self) -> np.ndarray:
+        return self.history[-1]
+
+    def stroke(self, tool: str, centre, radius: float, direction) -> tuple[float, float]:
+        """Apply one stroke; its tensor energy at the start and the end."""
+        if tool not in WARPS:
+            raise ArgumentError(f"unknown tool {tool!r}; allowed: {', '.join(WARPS)}", field="stroke.tool")
+        ell, degenerate = highlight_tangents(self.mesh, self.phi, self.h, self.k, w=self.problem.w)
+        brush = Brush(np.asarray(centre, float), float(radius), np.asarray(direction, float))
+        targets, inside = warp_targets(self.mesh, ell, brush, tool)
+        result = solve(self.problem, self.phi, targets * ~degenerate[:, None], inside, iterations=self.iterations)
+        self.history.append(result.phi)
+        self.future.clear()
+        self.energies.append((result.energy[0], result.energy[-1]))
+        return self.energies[-1]
+
+    def undo(self) -> bool:
+        if len(self.history) < 2:
+            return False
+        self.future.append(self.history.pop())
+        return True
+
+    def redo(self) -> bool:
+        if not self.future:
+            return False
+        self.history.append(self.future.pop())
+        return True
+
+    def field(self) -> np.ndarray:
+        """u (V, 3) in the mesh's own coordinates and vertex order: what a material's ``orientation`` holds."""
+        world = self.mesh.field(self.phi)[self.inverse]
+        local = world @ np.linalg.inv(self.linear).T
+        return local / np.maximum(np.linalg.norm(local, axis=1, keepdims=True), 1e-300)
+
+
 def apply_strokes(
     scene, index: int, strokes: list[dict], light: int | None = None, k: int = 2, iterations: int = 20
 ) -> dict[str, np.ndarray]:
     """The orientation field after the strokes (``u`` (V, 3) in the mesh's own coordinates and order, what a
     material's ``orientation`` file holds) and each stroke's energy at its start and end (``energy`` (S, 2))."""
-    data, mesh, inverse, h, u = _prepared(scene, index, light)
-    problem = HighlightProblem(mesh, h, k)
-    phi = mesh.angles(u)
-    energies = []
+    session = EditSession(scene, index, light, k, iterations)
     for stroke in strokes:
-        ell, degenerate = highlight_tangents(mesh, phi, h, k, w=problem.w)
-        brush = Brush(np.asarray(stroke["centre"], float), float(stroke["radius"]), np.asarray(stroke["stroke"], float))
-        targets, inside = warp_targets(mesh, ell, brush, stroke["tool"])
-        result = solve(problem, phi, targets * ~degenerate[:, None], inside, iterations=iterations)
-        phi = result.phi
-        energies.append((result.energy[0], result.energy[-1]))
-    world = mesh.field(phi)[inverse]
-    linear = scene.mesh[index].transform.matrix()[:3, :3]
-    local = world @ np.linalg.inv(linear).T
-    local /= np.maximum(np.linalg.norm(local, axis=1, keepdims=True), 1e-300)
-    return {"u": local, "energy": np.asarray(energies).reshape(-1, 2)}
+        session.stroke(stroke["tool"], stroke["centre"], stroke["radius"], stroke["stroke"])
+    return {"u": session.field(), "energy": np.asarray(session.energies).reshape(-1, 2)}

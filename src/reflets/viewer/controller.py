@@ -17,6 +17,9 @@ An event is a dict with a ``type`` (JSON-able: a script replays a list of them, 
   material), ``light`` (``fields``; ``index``, default the selected light), ``move`` (``offset`` [x, y, z]:
   the selected light, or the selected mesh's translation), ``transform`` (``fields``; ``index``, default the
   selected mesh);
+- highlight editing: ``paint`` (``tool`` bend / expand or null, ``radius``: the selected mesh's field is painted
+  by left drags, the stroke solved between frames), ``stroke`` (``centre``, ``stroke`` direction, ``tool``,
+  ``radius``: one stroke), ``undo``, ``redo``;
 - rendering: ``method`` (``name``, optional ``params``), ``shadows`` (``on``: every light's), ``exposure``
   (``stops``), ``tonemap`` (``mode``), ``reference`` (``spp``: start computing the reference of this view in
   the background), ``show`` (``mode``: image / reference / error).
@@ -71,6 +74,13 @@ class ViewerController:
         self.exposure, self.tonemap_mode, self.show = 0.0, "srgb", "image"
         #: a left drag turns the view about the eye (fly) instead of orbiting the target
         self.fly_mode = False
+        #: paint mode (highlight editing): the tool a left drag on the selected mesh applies, its brush radius
+        self.paint_tool: str | None = None
+        self.paint_radius = 0.0
+        self._paint = None  # the EditSession of the painted mesh
+        self._pending_stroke: dict | None = None  # applied before the next frame (the solver between frames)
+        self._fields_dir: Path | None = None  # the painted fields' files (removed by release)
+        self.last_hit: np.ndarray | None = None
         self.image: np.ndarray | None = None
         self.frame_ms: list[float] = []
         self.reference: ReferenceJob | None = None
@@ -121,6 +131,9 @@ class ViewerController:
     def render(self) -> np.ndarray:
         """The next frame (float32 HDR, row 0 at the top); a progressive method accumulates while nothing
         changes."""
+        if self._pending_stroke is not None:
+            stroke, self._pending_stroke = self._pending_stroke, None
+            self._on_stroke(**stroke)
         t = time.perf_counter()
         self.image = self.renderer.render()
         self.frame_ms = [*self.frame_ms[-(HISTORY - 1) :], 1e3 * (time.perf_counter() - t)]
@@ -201,6 +214,9 @@ class ViewerController:
     def _on_pointer(self, action: str, x: float, y: float, button: str = "left", shift: bool = False) -> None:
         if action == "down":
             self._pointer = {"x": x, "y": y, "start": (x, y), "button": button, "shift": shift, "moved": 0.0}
+            if self.paint_tool is not None and button == "left" and not shift:  # a stroke starts on the mesh?
+                hit = self.pick(x, y)
+                self._pointer["surface"] = self.last_hit if hit == ("mesh", self._paint.index) else None
         elif action == "move" and self._pointer is not None:
             p = self._pointer
             dx, dy = x - p["x"], y - p["y"]
@@ -208,7 +224,9 @@ class ViewerController:
             p["moved"] = max(p["moved"], math.hypot(x - p["start"][0], y - p["start"][1]))
             if p["moved"] < CLICK_PIXELS:
                 return
-            if p["button"] == "left" and p["shift"] and self.selection is not None:
+            if p["button"] == "left" and self.paint_tool is not None and p.get("surface") is not None:
+                self._paint_drag(p, x, y)
+            elif p["button"] == "left" and p["shift"] and self.selection is not None:
                 self._drag_selection(dx, dy)
             elif p["button"] == "left" and self.fly_mode:
                 self._on_look(dx * ORBIT_DEGREES_PER_PIXEL, dy * ORBIT_DEGREES_PER_PIXEL)
@@ -277,6 +295,7 @@ class ViewerController:
         col = int(np.clip(math.floor(x), 0, self.size[0] - 1))
         row = int(np.clip(math.floor(y), 0, self.size[1] - 1))
         hits = self._geometry.intersect(origin[None], dirs[row, col][None])
+        self.last_hit = origin + hits.t[0] * dirs[row, col] if hits.kind[0] >= 0 else None
         if hits.kind[0] == MESHES:
             return "mesh", int(self._geometry.face_mesh[hits.prim[0]])
         if hits.kind[0] == EMITTERS:
@@ -347,6 +366,79 @@ class ViewerController:
         size = self.camera.pixel_size(depth)
         self._on_move((size * (dx * right - dy * up)).tolist())
 
+    # highlight editing (docs/techniques/highlight-editing.md)
+    def _on_paint(self, tool: str | None, radius: float | None = None) -> None:
+        """Paint mode on the selected mesh (an anisotropic material used by that mesh alone), or off."""
+        from ..editing.tools import WARPS
+
+        if tool is None:
+            self.paint_tool = None
+            return
+        if tool not in WARPS:
+            raise ArgumentError(f"paint tool {tool!r}; allowed: {', '.join(WARPS)}", field="event.paint.tool")
+        index = self._selected("mesh", None)
+        name = self.scene.mesh[index].material
+        if "orientation" not in type(self.scene.materials[name]).model_fields:
+            raise ArgumentError(
+                f"material '{name}' ({self.scene.materials[name].type}) has no orientation to edit: an anisotropic "
+                "one (ward, ashikhmin_shirley, microfacet, scratched) has",
+                field="event.paint",
+            )
+        if sum(mesh.material == name for mesh in self.scene.mesh) > 1:
+            raise ArgumentError(f"material '{name}' is used by several meshes: one field cannot fit them all")
+        if self._paint is None or self._paint.index != index:
+            from ..editing.strokes import EditSession
+
+            self._paint = EditSession(self.scene, index)
+        self.paint_tool = tool
+        self.paint_radius = float(radius) if radius else 0.15 * self._bounds(("mesh", index))[1]
+
+    def _on_stroke(
+        self, centre: list[float], stroke: list[float], tool: str | None = None, radius: float | None = None
+    ):
+        """One stroke on the painted mesh (what a paint drag sends between frames)."""
+        if self._paint is None:
+            raise ArgumentError("no mesh is being painted: send a paint event first", field="event.stroke")
+        self._paint.stroke(tool or self.paint_tool or "bend", centre, radius or self.paint_radius, stroke)
+        self._apply_field()
+
+    def _on_undo(self) -> None:
+        if self._paint is not None and self._paint.undo():
+            self._apply_field()
+
+    def _on_redo(self) -> None:
+        if self._paint is not None and self._paint.redo():
+            self._apply_field()
+
+    def _paint_drag(self, pointer: dict, x: float, y: float) -> None:
+        """A drag from the stroke's start on the surface: its direction in the view plane, the stroke at the start
+        (pending: the next frame applies it, so a fast drag costs one solve a frame)."""
+        sx, sy = pointer["start"]
+        right, up, _ = self.camera.basis()
+        direction = (x - sx) * right - (y - sy) * up
+        self._pending_stroke = {"centre": list(pointer["surface"]), "stroke": direction.tolist()}
+
+    def _apply_field(self) -> None:
+        import tempfile
+
+        if self._fields_dir is None:
+            self._fields_dir = Path(tempfile.mkdtemp(prefix="reflets-fields-"))
+        path = self._fields_dir / f"field-{len(list(self._fields_dir.iterdir()))}.npz"
+        np.savez(path, u=self._paint.field().astype(np.float32))
+        name = self.scene.mesh[self._paint.index].material
+        self.renderer.set_material(name, orientation=str(path))
+        self._edited()
+
+    def save_field(self, path: str | Path, overwrite: bool = False) -> Path:
+        """The painted mesh's orientation field (.npz, u), for a material's ``orientation``."""
+        path = Path(path)
+        if self._paint is None:
+            raise ArgumentError("no mesh is being painted", field="save_field")
+        if path.exists() and not overwrite:
+            raise ArgumentError("exists already; choose another name (nothing was written)", file=path)
+        np.savez(path, u=self._paint.field().astype(np.float32))
+        return path
+
     # rendering
     def _on_method(self, name: str, params: dict | None = None) -> None:
         from ..renderer import Renderer
@@ -396,9 +488,24 @@ class ViewerController:
     def save_scene(self, path: str | Path, overwrite: bool = False) -> Path:
         """The current scene, edits and camera included, as TOML (an existing file is not replaced unless
         ``overwrite``)."""
-        from ..scene import save_scene
+        from ..scene import load_dict, save_scene
 
-        return save_scene(self.scene, path, overwrite=overwrite)
+        scene, path = self.scene, Path(path)
+        if self._fields_dir is not None:  # a painted field lives in a temporary folder: a copy beside the scene
+            materials = {}
+            for name, material in scene.materials.items():
+                field = getattr(material, "orientation", None)
+                if field is not None and Path(field).parent == self._fields_dir:
+                    copy = path.with_name(f"{path.stem}.{name}.npz")
+                    if copy.exists() and not overwrite:
+                        raise ArgumentError("exists already; choose another name (nothing was written)", file=copy)
+                    copy.write_bytes(Path(field).read_bytes())
+                    material = material.model_copy(update={"orientation": copy.resolve()})
+                materials[name] = material
+            data = scene.model_dump(exclude={"base_dir"}, exclude_none=True)
+            data["materials"] = {n: m.model_dump(exclude_none=True) for n, m in materials.items()}
+            scene = load_dict(data, base_dir=scene.base_dir)
+        return save_scene(scene, path, overwrite=overwrite)
 
     def save_camera(self, path: str | Path, overwrite: bool = False) -> Path:
         """The current camera as JSON (the scene's ``[camera]`` fields)."""
@@ -411,9 +518,13 @@ class ViewerController:
         return path
 
     def release(self) -> None:
+        import shutil
+
         if self.reference is not None:
             self.reference.cancel()
         self.renderer.release()
+        if self._fields_dir is not None:
+            shutil.rmtree(self._fields_dir, ignore_errors=True)
 
     # ------------------------------------------------------------------ internals
     def _camera_moved(self) -> None:

@@ -6,8 +6,9 @@ a controller event, so what a panel does is what a script replays. Edits are sen
   error), the reference's spp and its start, reset / frame, saving (screenshot, scene, camera);
 - Frame: median frame time, accumulated frames and spp, GL renderer, the reference's progress and the
   relative MSE against it;
-- Selection (a click in the view selects): a mesh's material parameters and transform, a light's position
-  (or corners), power and shadows.
+- Selection (a click in the view selects): a mesh's material parameters and transform (and, for an anisotropic
+  material, highlight painting: tool, brush radius, undo / redo, save the field), a light's position (or
+  corners), power and shadows.
 """
 
 from __future__ import annotations
@@ -173,6 +174,8 @@ class Panels:
                 for field, value in c.scene.materials[name].model_dump(exclude_none=True).items():
                     self._field(f"m.{name}.{field}", field, value,
                                 lambda f, v, n=name: {"type": "material", "name": n, "fields": {f: v}})  # fmt: skip
+                if "orientation" in type(c.scene.materials[name]).model_fields:
+                    self._paint_widgets(c)
                 imgui.separator()
                 imgui.text("transform")
                 for field, value in c.scene.mesh[index].transform.model_dump().items():
@@ -183,6 +186,31 @@ class Panels:
                     self._field(f"l.{index}.{field}", field, value,
                                 lambda f, v, i=index: {"type": "light", "index": i, "fields": {f: v}})  # fmt: skip
         imgui.end()
+
+    def _paint_widgets(self, c) -> None:
+        """Highlight editing on the selected mesh: the paint tool (a left drag on the mesh strokes it), the
+        brush radius, undo / redo, saving the field."""
+        imgui = self.imgui
+        imgui.separator()
+        tools = ("off", "bend", "expand")
+        current = c.paint_tool or "off"
+        changed, k = imgui.combo("paint", tools.index(current), list(tools))
+        if changed:
+            self._events.append(
+                {"type": "paint", "tool": None if k == 0 else tools[k], "radius": c.paint_radius or None}
+            )
+        if c.paint_tool is not None:
+            changed, radius = imgui.drag_float("brush radius", c.paint_radius, 0.005, 0.001, 100.0, "%.3f")
+            if changed:
+                self._events.append({"type": "paint", "tool": c.paint_tool, "radius": radius})
+            if imgui.button("undo"):
+                self._events.append({"type": "undo"})
+            imgui.same_line()
+            if imgui.button("redo"):
+                self._events.append({"type": "redo"})
+            imgui.same_line()
+            if imgui.button("save field"):
+                self.saves.append("field")
 
     def _markers(self, c) -> None:
         """The lights' gizmos: a disc at each point light, a ring at each area light's centre (yellow when

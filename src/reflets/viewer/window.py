@@ -5,9 +5,10 @@ frame is uploaded to a texture and tone mapped by the display pass. Input goes t
 events a script replays. Keys beyond the controller's: p saves a screenshot, t the scene (TOML, edits
 included), c the camera (JSON) — into the current folder under new names, never over a file; m cycles the
 method; x toggles shadows; v cycles image / reference / error (after g, which starts the reference); + / −
-change the exposure; h hides the panels (viewer/panels.py: the same as widgets); Escape closes. Input over a
-panel is the panel's. The title shows the method, the median frame time, the accumulated frames,
-the GL renderer and the selection (and the reference's progress and relative MSE).
+change the exposure; b paints the selected mesh's highlight (bend; u undo, y redo); h hides the panels
+(viewer/panels.py: the same as widgets); Escape closes. Input over a panel is the panel's. The title shows the
+method, the median frame time, the accumulated frames, the GL renderer and the selection (and the reference's
+progress and relative MSE).
 """
 
 from __future__ import annotations
@@ -159,6 +160,8 @@ class ViewerWindow:
             path = self.save_screenshot(_free_name("reflets-view", ".png"))
         elif what == "scene":
             path = c.save_scene(_free_name("reflets-view", ".toml"))
+        elif what == "field":
+            path = c.save_field(_free_name("reflets-field", ".npz"))
         else:
             path = c.save_camera(_free_name("reflets-camera", ".json"))
         print(f"wrote {path}")
@@ -250,6 +253,12 @@ class ViewerWindow:
             self._save("scene")
         elif key == keys.C:
             self._save("camera")
+        elif key == keys.B:
+            self._safe({"type": "paint", "tool": None if c.paint_tool else "bend"})
+        elif key == keys.U:
+            self._safe({"type": "undo"})
+        elif key == keys.Y:
+            self._safe({"type": "redo"})
         elif key == keys.H and self.panels is not None:
             self.panels.visible = not self.panels.visible
         elif key == keys.M:
