@@ -228,3 +228,20 @@ def test_painting_needs_an_anisotropic_material(controller):
     controller.handle({"type": "select", "mesh": 0})  # the Lambertian floor
     with pytest.raises(ArgumentError, match="no orientation to edit"):
         controller.handle({"type": "paint", "tool": "bend"})
+
+
+def test_the_highlight_curves_of_the_selected_mesh(ctx):
+    """Segments along ℓ over the view, for the selected mesh only, most of them inside the image."""
+    from reflets.demo import scene_path
+
+    c = ViewerController(scene_path("53_spun_plate.toml"), method="forward", size=(160, 120))
+    try:
+        assert len(c.highlight_segments()) == 0  # nothing selected
+        c.handle({"type": "select", "mesh": 0})
+        c.handle({"type": "show_highlights", "on": True})
+        segments = c.highlight_segments()
+        assert len(segments) > 100
+        inside = (segments[:, 0] > 0) & (segments[:, 0] < 160) & (segments[:, 1] > 0) & (segments[:, 1] < 120)
+        assert inside.mean() > 0.5
+    finally:
+        c.release()

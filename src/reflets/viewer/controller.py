@@ -19,7 +19,7 @@ An event is a dict with a ``type`` (JSON-able: a script replays a list of them, 
   selected mesh);
 - highlight editing: ``paint`` (``tool`` bend / expand or null, ``radius``: the selected mesh's field is painted
   by left drags, the stroke solved between frames), ``stroke`` (``centre``, ``stroke`` direction, ``tool``,
-  ``radius``: one stroke), ``undo``, ``redo``;
+  ``radius``: one stroke), ``undo``, ``redo``, ``show_highlights`` (``on``: segments along ℓ over the view);
 - rendering: ``method`` (``name``, optional ``params``), ``shadows`` (``on``: every light's), ``exposure``
   (``stops``), ``tonemap`` (``mode``), ``reference`` (``spp``: start computing the reference of this view in
   the background), ``show`` (``mode``: image / reference / error).
@@ -81,6 +81,8 @@ class ViewerController:
         self._pending_stroke: dict | None = None  # applied before the next frame (the solver between frames)
         self._fields_dir: Path | None = None  # the painted fields' files (removed by release)
         self.last_hit: np.ndarray | None = None
+        #: draw the selected mesh's potential highlight curves (segments along ℓ) over the view
+        self.show_highlights = False
         self.image: np.ndarray | None = None
         self.frame_ms: list[float] = []
         self.reference: ReferenceJob | None = None
@@ -428,6 +430,42 @@ class ViewerController:
         name = self.scene.mesh[self._paint.index].material
         self.renderer.set_material(name, orientation=str(path))
         self._edited()
+
+    def _on_show_highlights(self, on: bool) -> None:
+        self.show_highlights = bool(on)
+
+    def highlight_segments(self, max_segments: int = 1500) -> np.ndarray:
+        """Short segments along the potential highlight tangents ℓ of the selected mesh's field at its vertices
+        that face the camera (a subset, evenly spread), in pixels: (N, 4) x0, y0, x1, y1 — what the panels draw
+        over the view on demand (the curves the highlight may follow as the light moves)."""
+        from ..editing.highlights import mesh_highlights
+        from ..scene.camera import project
+
+        if self.selection is None or self.selection[0] != "mesh":
+            return np.zeros((0, 4))
+        key = (self.selection[1], self.scene.camera.model_dump_json(), id(self.scene))
+        if getattr(self, "_segments_key", None) != key:
+            try:
+                found = mesh_highlights(self.scene, self.selection[1])
+            except ArgumentError:  # no point or directional light: no highlight curves
+                found = None
+            self._segments_cache, self._segments_key = found, key
+        found = self._segments_cache
+        if found is None:
+            return np.zeros((0, 4))
+        eye = np.asarray(self.scene.camera.position, np.float64)
+        facing = np.einsum("ij,ij->i", found["normals"], eye - found["positions"]) > 0
+        keep = np.flatnonzero(facing & ~found["degenerate"])
+        keep = keep[:: max(1, len(keep) // max_segments)]
+        p, ell = found["positions"][keep], found["ell"][keep]
+        ell = ell / np.maximum(np.linalg.norm(ell, axis=1, keepdims=True), 1e-300)
+        half = 0.5 * self.camera.pixel_size(float(np.linalg.norm(self._bounds(self.selection)[0] - eye))) * 8
+        a, b = (
+            project(self.scene.camera, p - half * ell, self.size),
+            project(self.scene.camera, p + half * ell, self.size),
+        )
+        segments = np.concatenate([a, b], axis=1)
+        return segments[np.all(np.isfinite(segments), axis=1)]
 
     def save_field(self, path: str | Path, overwrite: bool = False) -> Path:
         """The painted mesh's orientation field (.npz, u), for a material's ``orientation``."""

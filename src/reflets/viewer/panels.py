@@ -81,6 +81,8 @@ class Panels:
         imgui.new_frame()
         if self.visible:
             self._markers(controller)
+            if controller.show_highlights:
+                self._highlight_curves(controller)
             self._view(controller)
             self._frame(controller)
             self._selection(controller)
@@ -199,6 +201,9 @@ class Panels:
             self._events.append(
                 {"type": "paint", "tool": None if k == 0 else tools[k], "radius": c.paint_radius or None}
             )
+        changed, on = imgui.checkbox("highlight curves", c.show_highlights)
+        if changed:
+            self._events.append({"type": "show_highlights", "on": on})
         if c.paint_tool is not None:
             changed, radius = imgui.drag_float("brush radius", c.paint_radius, 0.005, 0.001, 100.0, "%.3f")
             if changed:
@@ -211,6 +216,14 @@ class Panels:
             imgui.same_line()
             if imgui.button("save field"):
                 self.saves.append("field")
+
+    def _highlight_curves(self, c) -> None:
+        """Segments along ℓ at the selected mesh's vertices (cyan): where its highlight can run."""
+        imgui = self.imgui
+        draw = imgui.get_background_draw_list()
+        colour = imgui.get_color_u32(imgui.ImVec4(0.2, 0.9, 1.0, 0.8))
+        for x0, y0, x1, y1 in c.highlight_segments():
+            draw.add_line(imgui.ImVec2(float(x0), float(y0)), imgui.ImVec2(float(x1), float(y1)), colour, 1.0)
 
     def _markers(self, c) -> None:
         """The lights' gizmos: a disc at each point light, a ring at each area light's centre (yellow when
