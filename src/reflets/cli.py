@@ -137,6 +137,17 @@ def cmd_edit_highlights(args) -> int:
     return 0
 
 
+def cmd_export_gltf(args) -> int:
+    from .arguments import as_scene
+    from .gltf import export_gltf
+
+    path, notes = export_gltf(as_scene(args.scene), args.output)
+    for note in notes:
+        print(f"approximated: {note}")
+    print(f"wrote {path}")
+    return 0
+
+
 def cmd_reference(args) -> int:
     from .arguments import as_scene
     from .imageio import check_output_path, write_image
@@ -389,6 +400,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--iterations", type=int, default=20, help="Levenberg–Marquardt iterations at most (20)")
     p.add_argument("-o", "--output", required=True, help="output .npz: u (V, 3, the mesh's coordinates), energy")
     p.set_defaults(func=cmd_edit_highlights)
+
+    p = sub.add_parser("export-gltf", help="the scene as binary glTF (.glb): meshes with tangents, materials, lights")
+    p.add_argument("scene", help="scene file (.toml)")
+    p.add_argument("-o", "--output", required=True, help="output .glb")
+    p.set_defaults(func=cmd_export_gltf)
 
     p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
     p.add_argument("scene", help="scene file (.toml)")

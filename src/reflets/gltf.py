@@ -1,0 +1,235 @@
+"""``reflets export-gltf``: a scene as a binary glTF 2.0 file (.glb) that any glTF viewer opens — so that an
+edited orientation field (highlight editing) is seen outside reflets.
+
+- meshes: world-space positions, normals, **tangents** (xyz + handedness: the mesh's own, or its material's
+  orientation field — what a glTF renderer orients anisotropy by), uv, indices; one node each;
+- materials: glTF's metallic-roughness model, which is GGX: a reflets material maps exactly when it is a GGX
+  microfacet (roughness = √α; a conductor's base colour is its normal-incidence Fresnel reflectance), and
+  approximately otherwise (roughness from the lobe's GGX-equivalent α, as the prefiltered environment uses it;
+  a Lambertian part as base colour, a coloured specular through ``KHR_materials_specular``); anisotropic α
+  through ``KHR_materials_anisotropy`` (α_t = mix(α_b, 1, strength²) along the tangent, turned by 90° when the
+  rougher direction is the bitangent); each approximation is reported;
+- lights: point and directional lights through ``KHR_lights_punctual`` (reflets' radiometric units as they
+  are); area lights as emissive geometry (``KHR_materials_emissive_strength``); the environment is left out
+  (reported);
+- the camera: a perspective camera with the scene's field of view and aspect ratio.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ArgumentError
+
+ANISOTROPY = "KHR_materials_anisotropy"
+SPECULAR = "KHR_materials_specular"
+LIGHTS = "KHR_lights_punctual"
+EMISSIVE = "KHR_materials_emissive_strength"
+
+
+def _alphas(material) -> tuple[float, float] | None:
+    """The (along the tangent, along the bitangent) GGX α of an anisotropic material, or None (isotropic)."""
+    kind = material.type
+    if kind == "scratched":
+        return _alphas(material.base)
+    if kind in ("microfacet", "ward") and isinstance(material.alpha, tuple | list):
+        return float(material.alpha[0]), float(material.alpha[1])
+    if kind == "ashikhmin_shirley" and material.nu != material.nv:  # Walter et al.'s exponent ↔ α
+        return math.sqrt(2.0 / (material.nu + 2.0)), math.sqrt(2.0 / (material.nv + 2.0))
+    return None
+
+
+def material_to_gltf(name: str, material) -> tuple[dict, list[str]]:
+    """A glTF material dict (pbrMetallicRoughness and extensions) and the approximations it makes."""
+    from .fresnel import fresnel_conductor
+    from .techniques.ibl import equivalent_alpha
+
+    kind = material.type
+    notes: list[str] = []
+    base, metallic, roughness = [0.8, 0.8, 0.8], 0.0, 1.0
+    extensions: dict = {}
+    source = material.base if kind == "scratched" else material
+    if kind == "scratched":
+        notes.append(f"{name}: scratched, exported by its base BRDF (the scratch lobes have no glTF form)")
+    if source.type == "lambert":
+        base = list(source.albedo)
+    elif source.type == "microfacet":
+        alpha = source.alpha if not isinstance(source.alpha, tuple | list) else min(source.alpha)
+        roughness = math.sqrt(float(alpha))
+        if source.distribution != "ggx":
+            notes.append(f"{name}: {source.distribution} distribution exported as GGX")
+        if source.fresnel == "conductor":
+            eta = np.broadcast_to(np.asarray(source.eta if source.eta is not None else (0.2, 0.9, 1.1), float), 3)
+            k = np.broadcast_to(np.asarray(source.k if source.k is not None else (3.9, 2.4, 2.2), float), 3)
+            f0 = [float(fresnel_conductor(1.0, eta[c], k[c])) for c in range(3)]
+            base, metallic = list(np.asarray(f0) * np.asarray(source.specular)), 1.0
+        else:
+            base = list(source.diffuse)
+            extensions[SPECULAR] = {"specularFactor": 1.0, "specularColorFactor": [float(c) for c in source.specular]}
+    elif source.type == "mirror":
+        base, metallic, roughness = list(getattr(source, "reflectance", (1.0, 1.0, 1.0))), 1.0, 0.0
+    else:
+        lambert, _ = source.lambertian_split()
+        base = list(lambert)
+        roughness = math.sqrt(equivalent_alpha(source))
+        specular = next((getattr(source, f) for f in ("ks", "rs", "specular") if hasattr(source, f)), None)
+        if specular is not None:
+            extensions[SPECULAR] = {"specularFactor": 1.0, "specularColorFactor": [float(c) for c in specular]}
+        if _alphas(source) is None:
+            notes.append(f"{name}: {source.type} exported as GGX of roughness {roughness:.3f} (its lobe's equivalent)")
+        else:
+            notes.append(f"{name}: {source.type} exported as anisotropic GGX (its exponents' equivalent α)")
+    alphas = _alphas(material)
+    if alphas is not None:
+        along, across = alphas
+        rough, smooth = max(along, across), min(along, across)
+        roughness = math.sqrt(smooth)
+        strength = math.sqrt(max(0.0, (rough - smooth) / max(1.0 - smooth, 1e-9)))
+        extensions[ANISOTROPY] = {
+            "anisotropyStrength": min(strength, 1.0),
+            "anisotropyRotation": 0.0 if along >= across else math.pi / 2,  # the rougher direction
+        }
+    gltf = {
+        "name": name,
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [*[float(min(max(c, 0.0), 1.0)) for c in base], 1.0],
+            "metallicFactor": metallic,
+            "roughnessFactor": float(min(max(roughness, 0.0), 1.0)),
+        },
+        "doubleSided": True,
+    }
+    if extensions:
+        gltf["extensions"] = extensions
+    return gltf, notes
+
+
+def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
+    """Write ``scene`` as a .glb; returns the path and the approximations made (one line each)."""
+    import pygltflib as g
+
+    from .scene.geometry import mesh_data
+
+    path = Path(path)
+    if path.suffix.lower() != ".glb":
+        raise ArgumentError(f"the output is a binary glTF (.glb), got '{path.name}'", file=path)
+    notes: list[str] = []
+    blob = bytearray()
+    views, accessors = [], []
+
+    def add(array: np.ndarray, target: int | None, kind: str, component: int, bounds: bool = False) -> int:
+        data = np.ascontiguousarray(array)
+        while len(blob) % 4:
+            blob.append(0)
+        views.append(g.BufferView(buffer=0, byteOffset=len(blob), byteLength=data.nbytes, target=target))
+        blob.extend(data.tobytes())
+        accessor = g.Accessor(bufferView=len(views) - 1, componentType=component, count=len(data), type=kind)
+        if bounds:
+            accessor.min, accessor.max = data.min(axis=0).tolist(), data.max(axis=0).tolist()
+        accessors.append(accessor)
+        return len(accessors) - 1
+
+    names = list(scene.materials)
+    materials = []
+    for name in names:
+        material, found = material_to_gltf(name, scene.materials[name])
+        materials.append(material)
+        notes += found
+    meshes, nodes = [], []
+    for index, mesh in enumerate(scene.mesh):
+        data = mesh_data(scene, index)
+        attributes = g.Attributes(
+            POSITION=add(data.positions.astype(np.float32), g.ARRAY_BUFFER, g.VEC3, g.FLOAT, bounds=True),
+            NORMAL=add(data.normals.astype(np.float32), g.ARRAY_BUFFER, g.VEC3, g.FLOAT),
+            TANGENT=add(data.tangents.astype(np.float32), g.ARRAY_BUFFER, g.VEC4, g.FLOAT),
+            TEXCOORD_0=add(
+                np.stack([data.uvs[:, 0], 1.0 - data.uvs[:, 1]], 1).astype(np.float32), g.ARRAY_BUFFER, g.VEC2, g.FLOAT
+            ),
+        )
+        indices = add(data.indices.astype(np.uint32).ravel(), g.ELEMENT_ARRAY_BUFFER, g.SCALAR, g.UNSIGNED_INT)
+        primitive = g.Primitive(attributes=attributes, indices=indices, material=names.index(mesh.material))
+        meshes.append(g.Mesh(name=mesh.name or f"mesh[{index}]", primitives=[primitive]))
+        nodes.append(g.Node(name=mesh.name or f"mesh[{index}]", mesh=len(meshes) - 1))
+    lights = []
+    for index, light in enumerate(scene.light):
+        if light.type in ("point", "directional"):
+            power = light.intensity if light.type == "point" else light.irradiance
+            peak = max(float(max(power)), 1e-30)
+            lights.append({"type": light.type, "color": [float(c) / peak for c in power], "intensity": peak,
+                           "name": f"light[{index}]"})  # fmt: skip
+            node = g.Node(name=f"light[{index}]", extensions={LIGHTS: {"light": len(lights) - 1}})
+            if light.type == "point":
+                node.translation = [float(c) for c in light.position]
+            else:  # a glTF directional light shines along its node's −z
+                node.rotation = _rotation_to(np.asarray(light.direction, float))
+            nodes.append(node)
+        elif light.type in ("quad", "polygon"):
+            poly = np.asarray(light.polygon(), np.float32)
+            fan = np.array([[0, k, k + 1] for k in range(1, len(poly) - 1)], np.uint32).ravel()
+            peak = max(float(max(light.radiance)), 1e-30)
+            materials.append({"name": f"light[{index}]", "emissiveFactor": [float(c) / peak for c in light.radiance],
+                              "extensions": {EMISSIVE: {"emissiveStrength": peak}},
+                              "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1]},
+                              "doubleSided": bool(light.two_sided)})  # fmt: skip
+            attributes = g.Attributes(POSITION=add(poly, g.ARRAY_BUFFER, g.VEC3, g.FLOAT, bounds=True))
+            fan_indices = add(fan, g.ELEMENT_ARRAY_BUFFER, g.SCALAR, g.UNSIGNED_INT)
+            primitive = g.Primitive(attributes=attributes, indices=fan_indices, material=len(materials) - 1)
+            meshes.append(g.Mesh(name=f"light[{index}]", primitives=[primitive]))
+            nodes.append(g.Node(name=f"light[{index}]", mesh=len(meshes) - 1))
+            notes.append(
+                f"light[{index}]: a {light.type} light exported as emissive geometry (it lights nothing in glTF)"
+            )
+        else:
+            notes.append(f"light[{index}]: the environment map is not exported")
+    cam = scene.camera
+    eye, target = np.asarray(cam.position, float), np.asarray(cam.look_at, float)
+    nodes.append(
+        g.Node(
+            name="camera", camera=0, translation=eye.tolist(), rotation=_rotation_to(target - eye, np.asarray(cam.up))
+        )
+    )
+    used = sorted({ext for m in materials for ext in m.get("extensions", {})} | ({LIGHTS} if lights else set()))
+    document = g.GLTF2(
+        scene=0,
+        scenes=[g.Scene(nodes=list(range(len(nodes))))],
+        nodes=nodes,
+        meshes=meshes,
+        materials=[g.Material.from_dict(m) for m in materials],
+        accessors=accessors,
+        bufferViews=views,
+        buffers=[g.Buffer(byteLength=len(blob))],
+        cameras=[
+            g.Camera(
+                type="perspective",
+                perspective=g.Perspective(
+                    yfov=math.radians(cam.fov_y), aspectRatio=cam.size[0] / cam.size[1], znear=0.01
+                ),
+            )
+        ],  # fmt: skip
+        extensionsUsed=used,
+        extensions={LIGHTS: {"lights": lights}} if lights else {},
+    )
+    document.set_binary_blob(bytes(blob))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    document.save_binary(str(path))
+    return path, notes
+
+
+def _rotation_to(forward: np.ndarray, up: np.ndarray | None = None) -> list[float]:
+    """The quaternion (x, y, z, w) turning −z onto ``forward`` (and +y towards ``up``): glTF cameras and
+    directional lights look along their −z."""
+    f = forward / np.linalg.norm(forward)
+    up = np.array([0.0, 1.0, 0.0]) if up is None or abs(np.dot(up, f)) > 0.999 * np.linalg.norm(up) else up
+    if abs(np.dot(up / np.linalg.norm(up), f)) > 0.999:
+        up = np.array([1.0, 0.0, 0.0])
+    right = np.cross(f, up)
+    right /= np.linalg.norm(right)
+    true_up = np.cross(right, f)
+    m = np.stack([right, true_up, -f], axis=1)  # columns: the node's x, y, z in the world
+    w = math.sqrt(max(0.0, 1.0 + m[0, 0] + m[1, 1] + m[2, 2])) / 2.0
+    x = math.copysign(math.sqrt(max(0.0, 1.0 + m[0, 0] - m[1, 1] - m[2, 2])) / 2.0, m[2, 1] - m[1, 2])
+    y = math.copysign(math.sqrt(max(0.0, 1.0 - m[0, 0] + m[1, 1] - m[2, 2])) / 2.0, m[0, 2] - m[2, 0])
+    z = math.copysign(math.sqrt(max(0.0, 1.0 - m[0, 0] - m[1, 1] + m[2, 2])) / 2.0, m[1, 0] - m[0, 1])
+    return [x, y, z, w]
