@@ -27,6 +27,7 @@ SUITES: dict[str, str] = {
     "ibl": "reflets.bench.ibl:bench_ibl",
     "viewer": "reflets.bench.viewer:bench_viewer",
     "editing": "reflets.bench.editing:bench_editing",
+    "gltf": "reflets.bench.gltf:bench_gltf",
 }
 
 
