@@ -231,17 +231,44 @@ def test_painting_needs_an_anisotropic_material(controller):
 
 
 def test_the_highlight_curves_of_the_selected_mesh(ctx):
-    """Segments along ℓ over the view, for the selected mesh only, most of them inside the image."""
+    """A line integral convolution of ℓ over the pixels of the selected mesh only, blended into the shown frame."""
     from reflets.demo import scene_path
 
     c = ViewerController(scene_path("53_spun_plate.toml"), method="forward", size=(160, 120))
     try:
-        assert len(c.highlight_segments()) == 0  # nothing selected
+        plain = c.render().copy()
+        assert not c.highlight_curves()[1].any()  # nothing selected
         c.handle({"type": "select", "mesh": 0})
         c.handle({"type": "show_highlights", "on": True})
-        segments = c.highlight_segments()
-        assert len(segments) > 100
-        inside = (segments[:, 0] > 0) & (segments[:, 0] < 160) & (segments[:, 1] > 0) & (segments[:, 1] < 120)
-        assert inside.mean() > 0.5
+        curves, mask = c.highlight_curves()
+        assert 0.3 < mask.mean() < 0.9  # the plate's pixels
+        assert curves[mask].std() > 0.1 and np.all(curves[~mask] == 0)  # a pattern on the plate only
+        shown = c.shown()
+        assert not np.allclose(shown[mask], plain[mask])
+        np.testing.assert_array_equal(shown[~mask], plain[~mask])
+    finally:
+        c.release()
+
+
+def test_the_stencil_and_the_light_tool_in_paint_mode(ctx):
+    """The stencil sets the field under the brush (the frame changes there); the light tool moves the light so
+    that the highlight through the stroke's point runs along the drag."""
+    from reflets.demo import scene_path
+
+    c = ViewerController(scene_path("53_spun_plate.toml"), method="forward", size=(96, 72))
+    try:
+        before = c.render().copy()
+        c.handle({"type": "select", "mesh": 0})
+        c.handle({"type": "paint", "tool": "stencil", "radius": 0.3})
+        c.handle({"type": "stroke", "centre": [0.5, 0.0, 0.4], "stroke": [1.0, 0.0, 0.0]})
+        assert relmse(c.render(), before) > 1e-4
+        light = np.asarray(c.scene.light[0].position)
+        c.handle({"type": "paint", "tool": "light"})
+        c.handle({"type": "stroke", "centre": [-0.5, 0.0, 0.3], "stroke": [1.0, 0.0, 0.2]})
+        moved = np.asarray(c.scene.light[0].position)
+        assert np.linalg.norm(moved - light) > 1e-3
+        assert np.linalg.norm(moved - [-0.5, 0.0, 0.3]) == pytest.approx(
+            np.linalg.norm(light - [-0.5, 0.0, 0.3]), rel=0.05
+        )
     finally:
         c.release()

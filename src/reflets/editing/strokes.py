@@ -13,7 +13,7 @@ from ..errors import ArgumentError
 from .analysis import highlight_tangents
 from .highlights import _prepared
 from .solver import HighlightProblem, solve
-from .tools import WARPS, Brush, warp_targets
+from .tools import WARPS, Brush, stencil, warp_targets
 
 STROKE_KEYS = {"tool", "centre", "radius", "stroke"}
 
@@ -61,11 +61,18 @@ class EditSession:
         return self.history[-1]
 
     def stroke(self, tool: str, centre, radius: float, direction) -> tuple[float, float]:
-        """Apply one stroke; its tensor energy at the start and the end."""
-        if tool not in WARPS:
-            raise ArgumentError(f"unknown tool {tool!r}; allowed: {', '.join(WARPS)}", field="stroke.tool")
-        ell, degenerate = highlight_tangents(self.mesh, self.phi, self.h, self.k, w=self.problem.w)
+        """Apply one stroke (a warp solved for, or the stencil); its tensor energy at the start and the end (zero
+        for the stencil, which sets the field directly)."""
         brush = Brush(np.asarray(centre, float), float(radius), np.asarray(direction, float))
+        if tool == "stencil":
+            self.history.append(stencil(self.mesh, self.phi, self.h, brush))
+            self.future.clear()
+            self.energies.append((0.0, 0.0))
+            return self.energies[-1]
+        if tool not in WARPS:
+            allowed = ", ".join([*WARPS, "stencil"])
+            raise ArgumentError(f"unknown tool {tool!r}; allowed: {allowed}", field="stroke.tool")
+        ell, degenerate = highlight_tangents(self.mesh, self.phi, self.h, self.k, w=self.problem.w)
         targets, inside = warp_targets(self.mesh, ell, brush, tool)
         result = solve(self.problem, self.phi, targets * ~degenerate[:, None], inside, iterations=self.iterations)
         self.history.append(result.phi)

@@ -17,9 +17,11 @@ An event is a dict with a ``type`` (JSON-able: a script replays a list of them, 
   material), ``light`` (``fields``; ``index``, default the selected light), ``move`` (``offset`` [x, y, z]:
   the selected light, or the selected mesh's translation), ``transform`` (``fields``; ``index``, default the
   selected mesh);
-- highlight editing: ``paint`` (``tool`` bend / expand or null, ``radius``: the selected mesh's field is painted
-  by left drags, the stroke solved between frames), ``stroke`` (``centre``, ``stroke`` direction, ``tool``,
-  ``radius``: one stroke), ``undo``, ``redo``, ``show_highlights`` (``on``: segments along ℓ over the view);
+- highlight editing: ``paint`` (``tool`` bend / expand / stencil / light or null, ``radius``: the selected
+  mesh's field is painted by left drags, the stroke solved between frames; the light tool moves the light),
+  ``stroke`` (``centre``, ``stroke`` direction, ``tool``,
+  ``radius``: one stroke), ``undo``, ``redo``, ``show_highlights`` (``on``: the potential highlight curves,
+  a line integral convolution of ℓ, over the selected mesh);
 - rendering: ``method`` (``name``, optional ``params``), ``shadows`` (``on``: every light's), ``exposure``
   (``stops``), ``tonemap`` (``mode``), ``reference`` (``spp``: start computing the reference of this view in
   the background), ``show`` (``mode``: image / reference / error).
@@ -54,6 +56,9 @@ ORBIT_KEY_DEGREES = 5.0
 SHOW_MODES = ("image", "reference", "error")
 #: frame times kept for the overlay's median
 HISTORY = 60
+#: the highlight-editing tools a drag applies: warps solved for, the stencil, and the light tool (the drag is
+#: the highlight's new direction there: the light moves)
+PAINT_TOOLS = ("bend", "expand", "stencil", "light")
 
 
 class ViewerController:
@@ -81,7 +86,7 @@ class ViewerController:
         self._pending_stroke: dict | None = None  # applied before the next frame (the solver between frames)
         self._fields_dir: Path | None = None  # the painted fields' files (removed by release)
         self.last_hit: np.ndarray | None = None
-        #: draw the selected mesh's potential highlight curves (segments along ℓ) over the view
+        #: blend the selected mesh's potential highlight curves (a line integral convolution of ℓ) into the view
         self.show_highlights = False
         self.image: np.ndarray | None = None
         self.frame_ms: list[float] = []
@@ -146,6 +151,12 @@ class ViewerController:
         (reference + 0.01), in the red channel)."""
         if self.image is None:
             self.render()
+        if self.show_highlights:
+            curves, mask = self.highlight_curves()
+            if mask.any():
+                lic = curves[..., None].astype(np.float32)  # streaks modulate the frame, and show on dark parts
+                shaded = self.image * (0.4 + 0.6 * lic) + 0.06 * lic
+                return np.where(mask[..., None], shaded, self.image)
         if self.show == "image" or self.reference is None or self.reference.image is None:
             return self.image
         if self.show == "reference":
@@ -371,13 +382,11 @@ class ViewerController:
     # highlight editing (docs/techniques/highlight-editing.md)
     def _on_paint(self, tool: str | None, radius: float | None = None) -> None:
         """Paint mode on the selected mesh (an anisotropic material used by that mesh alone), or off."""
-        from ..editing.tools import WARPS
-
         if tool is None:
             self.paint_tool = None
             return
-        if tool not in WARPS:
-            raise ArgumentError(f"paint tool {tool!r}; allowed: {', '.join(WARPS)}", field="event.paint.tool")
+        if tool not in PAINT_TOOLS:
+            raise ArgumentError(f"paint tool {tool!r}; allowed: {', '.join(PAINT_TOOLS)}", field="event.paint.tool")
         index = self._selected("mesh", None)
         name = self.scene.mesh[index].material
         if "orientation" not in type(self.scene.materials[name]).model_fields:
@@ -397,12 +406,39 @@ class ViewerController:
 
     def _on_stroke(
         self, centre: list[float], stroke: list[float], tool: str | None = None, radius: float | None = None
-    ):
-        """One stroke on the painted mesh (what a paint drag sends between frames)."""
+    ) -> None:
+        """One stroke on the painted mesh (what a paint drag sends between frames); the light tool moves the
+        first point or directional light instead."""
         if self._paint is None:
             raise ArgumentError("no mesh is being painted: send a paint event first", field="event.stroke")
-        self._paint.stroke(tool or self.paint_tool or "bend", centre, radius or self.paint_radius, stroke)
+        tool = tool or self.paint_tool or "bend"
+        if tool == "light":
+            self._light_tool(np.asarray(centre, float), np.asarray(stroke, float))
+            return
+        self._paint.stroke(tool, centre, radius or self.paint_radius, stroke)
         self._apply_field()
+
+    def _light_tool(self, centre: np.ndarray, direction: np.ndarray) -> None:
+        from ..editing.strokes import EditSession
+        from ..editing.tools import light_tool
+
+        session = self._paint
+        vertex = int(np.argmin(np.linalg.norm(session.mesh.positions - centre, axis=1)))
+        index = next((i for i, lt in enumerate(self.scene.light) if lt.type in ("point", "directional")), None)
+        if index is None:
+            raise ArgumentError("the light tool moves a point or directional light: the scene has none")
+        try:
+            incoming, _ = light_tool(session.mesh, session.phi, vertex, direction, self.scene.camera.position)
+        except ValueError as exc:
+            raise ArgumentError(str(exc), field="event.stroke") from None
+        light, p = self.scene.light[index], session.mesh.positions[vertex]
+        if light.type == "point":
+            fields = {"position": (p + np.linalg.norm(np.asarray(light.position) - p) * incoming).tolist()}
+        else:
+            fields = {"direction": (-incoming).tolist()}
+        self.renderer.set_light(index, **fields)
+        self._edited()
+        self._paint = EditSession(self.scene, session.index)  # h changed with the light (the strokes restart)
 
     def _on_undo(self) -> None:
         if self._paint is not None and self._paint.undo():
@@ -434,38 +470,52 @@ class ViewerController:
     def _on_show_highlights(self, on: bool) -> None:
         self.show_highlights = bool(on)
 
-    def highlight_segments(self, max_segments: int = 1500) -> np.ndarray:
-        """Short segments along the potential highlight tangents ℓ of the selected mesh's field at its vertices
-        that face the camera (a subset, evenly spread), in pixels: (N, 4) x0, y0, x1, y1 — what the panels draw
-        over the view on demand (the curves the highlight may follow as the light moves)."""
+    def highlight_curves(self) -> tuple[np.ndarray, np.ndarray]:
+        """The selected mesh's potential highlight curves in the view: a line integral convolution of its ℓ
+        (editing/lic.py) over the pixels that show the mesh, (H, W) in [0, 1], and that mask — what the view
+        blends in when ``show_highlights`` is on (the curves its highlight may follow as the light moves)."""
         from ..editing.highlights import mesh_highlights
-        from ..scene.camera import project
+        from ..editing.lic import line_integral_convolution
+        from ..reference.geometry import MESHES, SceneGeometry
+        from ..scene.camera import pixel_rays, project
+        from ..scene.geometry import mesh_data
 
+        width, height = self.size
+        empty = (np.zeros((height, width)), np.zeros((height, width), bool))
         if self.selection is None or self.selection[0] != "mesh":
-            return np.zeros((0, 4))
-        key = (self.selection[1], self.scene.camera.model_dump_json(), id(self.scene))
-        if getattr(self, "_segments_key", None) != key:
-            try:
-                found = mesh_highlights(self.scene, self.selection[1])
-            except ArgumentError:  # no point or directional light: no highlight curves
-                found = None
-            self._segments_cache, self._segments_key = found, key
-        found = self._segments_cache
-        if found is None:
-            return np.zeros((0, 4))
-        eye = np.asarray(self.scene.camera.position, np.float64)
-        facing = np.einsum("ij,ij->i", found["normals"], eye - found["positions"]) > 0
-        keep = np.flatnonzero(facing & ~found["degenerate"])
-        keep = keep[:: max(1, len(keep) // max_segments)]
-        p, ell = found["positions"][keep], found["ell"][keep]
-        ell = ell / np.maximum(np.linalg.norm(ell, axis=1, keepdims=True), 1e-300)
-        half = 0.5 * self.camera.pixel_size(float(np.linalg.norm(self._bounds(self.selection)[0] - eye))) * 8
-        a, b = (
-            project(self.scene.camera, p - half * ell, self.size),
-            project(self.scene.camera, p + half * ell, self.size),
+            return empty
+        index = self.selection[1]
+        key = (index, self.scene.camera.model_dump_json(), id(self.scene))
+        if getattr(self, "_curves_key", None) == key:
+            return self._curves
+        try:
+            found = mesh_highlights(self.scene, index)
+        except ArgumentError:  # no point or directional light: no highlight curves
+            self._curves, self._curves_key = empty, key
+            return empty
+        if self._geometry is None:
+            self._geometry = SceneGeometry(self.scene)
+        geometry = self._geometry
+        origin, dirs = pixel_rays(self.scene.camera, self.size)
+        hits = geometry.intersect(np.broadcast_to(origin, dirs.shape).reshape(-1, 3), dirs.reshape(-1, 3))
+        on = (hits.kind == MESHES) & (geometry.face_mesh[np.maximum(hits.prim, 0)] == index)
+        offset = sum(mesh_data(self.scene, j).n_vertices for j in range(index))  # its vertices in the geometry's
+        corners = geometry.faces[hits.prim[on]] - offset  # in the mesh's own vertex order (mesh_data's)
+        ell = found["ell"][corners]  # (N, 3 corners, 3)
+        ell[:, 1:] *= np.where(np.einsum("nj,ncj->nc", ell[:, 0], ell[:, 1:]) < 0, -1.0, 1.0)[..., None]
+        u, v = hits.u[on], hits.v[on]
+        along = (1 - u - v)[:, None] * ell[:, 0] + u[:, None] * ell[:, 1] + v[:, None] * ell[:, 2]
+        points = origin + hits.t[on][:, None] * dirs.reshape(-1, 3)[on]
+        scale = 1e-3 * self._bounds(("mesh", index))[1]
+        screen = project(self.scene.camera, points + scale * along, self.size) - project(
+            self.scene.camera, points, self.size
         )
-        segments = np.concatenate([a, b], axis=1)
-        return segments[np.all(np.isfinite(segments), axis=1)]
+        directions = np.zeros((height * width, 2))
+        directions[on] = np.nan_to_num(screen)
+        mask = on.reshape(height, width)
+        self._curves = (line_integral_convolution(directions.reshape(height, width, 2), mask), mask)
+        self._curves_key = key
+        return self._curves
 
     def save_field(self, path: str | Path, overwrite: bool = False) -> Path:
         """The painted mesh's orientation field (.npz, u), for a material's ``orientation``."""

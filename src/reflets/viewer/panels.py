@@ -81,8 +81,6 @@ class Panels:
         imgui.new_frame()
         if self.visible:
             self._markers(controller)
-            if controller.show_highlights:
-                self._highlight_curves(controller)
             self._view(controller)
             self._frame(controller)
             self._selection(controller)
@@ -194,7 +192,7 @@ class Panels:
         brush radius, undo / redo, saving the field."""
         imgui = self.imgui
         imgui.separator()
-        tools = ("off", "bend", "expand")
+        tools = ("off", "bend", "expand", "stencil", "light")
         current = c.paint_tool or "off"
         changed, k = imgui.combo("paint", tools.index(current), list(tools))
         if changed:
@@ -216,14 +214,6 @@ class Panels:
             imgui.same_line()
             if imgui.button("save field"):
                 self.saves.append("field")
-
-    def _highlight_curves(self, c) -> None:
-        """Segments along ℓ at the selected mesh's vertices (cyan): where its highlight can run."""
-        imgui = self.imgui
-        draw = imgui.get_background_draw_list()
-        colour = imgui.get_color_u32(imgui.ImVec4(0.2, 0.9, 1.0, 0.8))
-        for x0, y0, x1, y1 in c.highlight_segments():
-            draw.add_line(imgui.ImVec2(float(x0), float(y0)), imgui.ImVec2(float(x1), float(y1)), colour, 1.0)
 
     def _markers(self, c) -> None:
         """The lights' gizmos: a disc at each point light, a ring at each area light's centre (yellow when
