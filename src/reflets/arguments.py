@@ -46,3 +46,20 @@ def check_spp(spp) -> int | None:
     if not 1 <= spp <= MAX_SPP:
         raise ArgumentError(f"{spp} is out of range; samples per pixel must be in 1..{MAX_SPP}", field="spp")
     return int(spp)
+
+
+def read_json_list(path: str | Path, field: str, what: str) -> list:
+    """A JSON file holding a list (an event script, a list of strokes): its items, or a one-line error naming the
+    file and the option."""
+    import json
+
+    path = Path(path)
+    try:
+        items = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ArgumentError("file not found", file=path, field=field) from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ArgumentError(f"not a JSON list of {what}: {exc}", file=path, field=field) from None
+    if not isinstance(items, list):
+        raise ArgumentError(f"must be a JSON list of {what}", file=path, field=field)
+    return items

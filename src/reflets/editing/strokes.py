@@ -4,7 +4,6 @@ solver finds the field that follows (``solver.solve``). Behind ``reflets edit-hi
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -20,15 +19,10 @@ STROKE_KEYS = {"tool", "centre", "radius", "stroke"}
 
 def load_strokes(path: str | Path) -> list[dict]:
     """A JSON list of strokes: {"tool": "bend" | "expand", "centre": [x, y, z], "radius": r, "stroke": [x, y, z]}."""
+    from ..arguments import read_json_list
+
     path = Path(path)
-    try:
-        strokes = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ArgumentError("file not found", file=path, field="--strokes") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ArgumentError(f"not a JSON list of strokes: {exc}", file=path, field="--strokes") from None
-    if not isinstance(strokes, list):
-        raise ArgumentError("must be a JSON list of strokes", file=path, field="--strokes")
+    strokes = read_json_list(path, "--strokes", "strokes")
     for k, stroke in enumerate(strokes):
         if not isinstance(stroke, dict) or set(stroke) != STROKE_KEYS:
             raise ArgumentError(f"stroke {k} needs exactly {sorted(STROKE_KEYS)}", file=path, field=f"strokes[{k}]")

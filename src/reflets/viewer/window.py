@@ -13,7 +13,6 @@ progress and relative MSE).
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 from pathlib import Path
@@ -26,14 +25,11 @@ from .panels import METHODS  # what m cycles through: the panel's list
 
 def load_script(path: str | Path) -> list[dict]:
     """A recorded event list (JSON: a list of event objects; ``{"type": "wait", "frames": n}`` waits)."""
+    from ..arguments import read_json_list
+
     path = Path(path)
-    try:
-        events = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ArgumentError("file not found", file=path, field="--script") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ArgumentError(f"not a JSON event list: {exc}", file=path, field="--script") from None
-    if not isinstance(events, list) or not all(isinstance(e, dict) and "type" in e for e in events):
+    events = read_json_list(path, "--script", "events")
+    if not all(isinstance(e, dict) and "type" in e for e in events):
         raise ArgumentError("must be a JSON list of objects with a 'type'", file=path, field="--script")
     return events
 
