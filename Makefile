@@ -1,6 +1,6 @@
 # Quick start: `make demo` (set up + render the gallery) and `make test` (set up + run the tests).
 # `make test` also installs the [reference] extra (Mitsuba 3) so the cross-checks against it run, the [viewer]
-# extra and Xvfb (tools/install-system-packages) so the viewer's window tests run.
+# extra and Xvfb (tools/install-system-packages) so the viewer's window tests run, and the [ar] extra (OpenCV).
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
@@ -18,7 +18,7 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	tools/install-system-packages
-	$(BIN)/python -m pip install --quiet -e ".[test,reference,viewer]"
+	$(BIN)/python -m pip install --quiet -e ".[test,reference,viewer,ar]"
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed

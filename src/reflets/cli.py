@@ -148,6 +148,47 @@ def cmd_export_gltf(args) -> int:
     return 0
 
 
+def cmd_ar_board(args) -> int:
+    from .ar.board import Board
+    from .imageio import write_png8
+
+    board = Board.grid(args.columns, args.rows, args.size, args.gap, args.dictionary)
+    board.cv_dictionary()  # an unknown dictionary fails before anything is written
+    out = board.save(args.output)
+    print(f"wrote {out} ({len(board.markers)} markers)")
+    if args.image:
+        image, _ = board.image()
+        print(f"wrote {write_png8(args.image, np.repeat(image[..., None], 3, axis=2))}")
+    return 0
+
+
+def cmd_ar_track(args) -> int:
+    from PIL import Image
+
+    from .ar.board import Board
+    from .ar.camera import Intrinsics
+    from .ar.tracking import track
+
+    board, intrinsics = Board.load(args.board), Intrinsics.load(args.intrinsics)
+    frames = []
+    for name in args.images:
+        try:
+            frames.append(np.asarray(Image.open(name).convert("L")))
+        except (OSError, ValueError) as exc:
+            raise ArgumentError(f"cannot read the image ({exc})", file=name) from None
+    poses = track(frames, board, intrinsics)
+    views = [
+        {"image": str(name), "R_world_to_cam": p.R.tolist(), "t_world_to_cam": p.t.tolist(), "markers": p.markers}
+        if p is not None
+        else {"image": str(name), "R_world_to_cam": None, "t_world_to_cam": None, "markers": 0}
+        for name, p in zip(args.images, poses, strict=True)
+    ]
+    Path(args.output).write_text(json.dumps({"views": views}, indent=1), encoding="utf-8")
+    found = sum(p is not None for p in poses)
+    print(f"wrote {args.output}: a pose for {found} of {len(poses)} images")
+    return 0
+
+
 def cmd_reference(args) -> int:
     from .arguments import as_scene
     from .imageio import check_output_path, write_image
@@ -405,6 +446,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene", help="scene file (.toml)")
     p.add_argument("-o", "--output", required=True, help="output .glb")
     p.set_defaults(func=cmd_export_gltf)
+
+    p = sub.add_parser("ar", help="augmented reality: marker boards and tracking (the 'ar' extra)")
+    ar = p.add_subparsers(dest="ar_command", required=True, metavar="AR_COMMAND")
+    q = ar.add_parser("board", help="a grid board of ArUco markers: board.json (and its printable image)")
+    q.add_argument("-o", "--output", required=True, help="board.json")
+    q.add_argument("--image", help="the board as a PNG to print")
+    q.add_argument("--columns", type=int, default=5)
+    q.add_argument("--rows", type=int, default=4)
+    q.add_argument("--size", type=float, default=0.05, help="marker side in board units (default 0.05: metres)")
+    q.add_argument("--gap", type=float, default=0.0125, help="space between markers")
+    q.add_argument("--dictionary", default="DICT_6X6_250", help="OpenCV ArUco dictionary")
+    q.set_defaults(func=cmd_ar_board)
+    q = ar.add_parser("track", help="camera poses of images of a board: poses.json")
+    q.add_argument("images", nargs="+", help="images (in order: a pose is kept a few frames when the board is lost)")
+    q.add_argument("--intrinsics", required=True, help="camera.json: K, dist, size")
+    q.add_argument("--board", required=True, help="board.json")
+    q.add_argument("-o", "--output", required=True, help="poses.json")
+    q.set_defaults(func=cmd_ar_track)
 
     p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
     p.add_argument("scene", help="scene file (.toml)")

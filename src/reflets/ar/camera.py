@@ -1,0 +1,73 @@
+"""Camera intrinsics (OpenCV's pinhole K and 5 distortion coefficients) and the OpenGL matrices built from them
+and a pose — for any principal point (the document's projection is right only for a centred one), with the
+axis flip between OpenCV's camera (x right, y down, z forward) and OpenGL's (x right, y up, z backward):
+diag(1, −1, −1) [erratum: the document says OpenCV's x axis points left; it points right]. JSON:
+``{"K": 3 × 3, "dist": [5], "size": [w, h]}``."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ArgumentError
+
+CV_TO_GL = np.diag([1.0, -1.0, -1.0])
+
+
+@dataclass
+class Intrinsics:
+    K: np.ndarray
+    dist: np.ndarray
+    size: tuple[int, int]
+
+    @classmethod
+    def from_fov(cls, size: tuple[int, int], fov_y: float, principal: tuple[float, float] | None = None) -> Intrinsics:
+        """A distortion-free camera of vertical field of view ``fov_y`` (degrees)."""
+        f = 0.5 * size[1] / np.tan(np.radians(fov_y) / 2)
+        cx, cy = principal if principal is not None else (0.5 * size[0], 0.5 * size[1])
+        return cls(np.array([[f, 0, cx], [0, f, cy], [0, 0, 1.0]]), np.zeros(5), tuple(size))
+
+    @classmethod
+    def load(cls, path: str | Path) -> Intrinsics:
+        path = Path(path)
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+            K = np.asarray(data["K"], np.float64).reshape(3, 3)
+            dist = np.asarray(data.get("dist", [0] * 5), np.float64).reshape(5)
+            return cls(K, dist, (int(data["size"][0]), int(data["size"][1])))
+        except FileNotFoundError:
+            raise ArgumentError("file not found", file=path, field="--intrinsics") from None
+        except (ValueError, KeyError, TypeError) as exc:
+            raise ArgumentError(f"not an intrinsics file ({exc})", file=path, field="--intrinsics") from None
+
+    def save(self, path: str | Path) -> Path:
+        path = Path(path)
+        data = {"K": self.K.tolist(), "dist": self.dist.tolist(), "size": list(self.size)}
+        path.write_text(json.dumps(data, indent=1), encoding="utf-8")
+        return path
+
+    def gl_projection(self, near: float, far: float) -> np.ndarray:
+        """The OpenGL projection matching K exactly (principal point anywhere, skew included): OpenCV puts pixel
+        (0, 0)'s centre at coordinate 0, OpenGL at 0.5 — hence the half-pixel shift; row 0 at the top."""
+        (fx, s, cx), (_, fy, cy) = self.K[0], self.K[1]
+        cx, cy = cx + 0.5, cy + 0.5
+        w, h = self.size
+        return np.array(
+            [
+                [2 * fx / w, -2 * s / w, 1 - 2 * cx / w, 0],
+                [0, 2 * fy / h, 2 * cy / h - 1, 0],
+                [0, 0, -(far + near) / (far - near), -2 * far * near / (far - near)],
+                [0, 0, -1, 0],
+            ]
+        )
+
+
+def gl_view(R_world_to_cam: np.ndarray, t_world_to_cam: np.ndarray) -> np.ndarray:
+    """The OpenGL view matrix of an OpenCV pose (x_cam = R x_world + t)."""
+    view = np.eye(4)
+    view[:3, :3] = CV_TO_GL @ R_world_to_cam
+    view[:3, 3] = CV_TO_GL @ np.asarray(t_world_to_cam, np.float64)
+    return view

@@ -1,0 +1,61 @@
+"""Views of a marker board with known poses — the test data of the tracking (real photographs are not available
+offline: these are generated, and say so). A planar board seen by a pinhole camera is exactly a projective
+warp of its top view: each pixel's ray meets the plane y = 0, the board image is sampled there (bilinear),
+paper elsewhere a mid grey; then optional Gaussian blur (σ in pixels), brightness gain and noise."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .board import Board, _aruco
+from .camera import Intrinsics
+
+
+def look_at_pose(eye, target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+    """The OpenCV pose (R, t: x_cam = R x_world + t) of a camera at ``eye`` looking at ``target``."""
+    eye, target, up = (np.asarray(v, np.float64) for v in (eye, target, up))
+    z = target - eye
+    z /= np.linalg.norm(z)  # OpenCV's camera looks along +z
+    x = np.cross(z, up)
+    if np.linalg.norm(x) < 1e-9:
+        x = np.cross(z, [0.0, 0.0, 1.0])
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)  # down in the image
+    R = np.stack([x, y, z])
+    return R, -R @ eye
+
+
+def render_view(
+    board: Board,
+    intrinsics: Intrinsics,
+    R: np.ndarray,
+    t: np.ndarray,
+    blur: float = 0.0,
+    noise: float = 0.0,
+    gain: float = 1.0,
+    seed: int = 0,
+) -> np.ndarray:
+    """A grey uint8 image (H, W) of the board seen with pose (R, t) through a distortion-free ``intrinsics``."""
+    cv2 = _aruco()
+    top, to_pixel = board.image()
+    w, h = intrinsics.size
+    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    rays_cam = np.linalg.solve(intrinsics.K, np.stack([u.ravel(), v.ravel(), np.ones(u.size)]))
+    rays = R.T @ rays_cam  # world directions
+    centre = -R.T @ t
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = -centre[1] / rays[1]
+    hit = centre[:, None] + s * rays
+    valid = (s > 0) & np.isfinite(s)
+    col = to_pixel[0, 0] * hit[0] + to_pixel[0, 2]
+    row = to_pixel[1, 1] * hit[2] + to_pixel[1, 2]
+    map_x = np.where(valid, col, -1).reshape(h, w).astype(np.float32)
+    map_y = np.where(valid, row, -1).reshape(h, w).astype(np.float32)
+    image = cv2.remap(top, map_x, map_y, cv2.INTER_LINEAR,
+                      borderMode=cv2.BORDER_CONSTANT, borderValue=128).astype(np.float64)  # fmt: skip
+    if blur > 0:
+        image = cv2.GaussianBlur(image, (0, 0), blur)
+    image = image * gain
+    if noise > 0:
+        image = image + np.random.default_rng(seed).normal(0.0, noise, image.shape)
+    return np.clip(np.round(image), 0, 255).astype(np.uint8)
