@@ -5,13 +5,13 @@ top-left, top-right, bottom-right, bottom-left as its image is drawn)."""
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ArgumentError
+from . import read_json, write_json
 
 
 def _aruco():
@@ -46,21 +46,16 @@ class Board:
 
     @classmethod
     def load(cls, path: str | Path) -> Board:
-        path = Path(path)
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
+        def parse(data: dict) -> Board:
             markers = {int(k): np.asarray(v, np.float64).reshape(4, 3) for k, v in data["markers"].items()}
             return cls(str(data["dictionary"]), markers)
-        except FileNotFoundError:
-            raise ArgumentError("file not found", file=path, field="--board") from None
-        except (ValueError, KeyError, TypeError) as exc:
-            raise ArgumentError(f"not a board file ({exc})", file=path, field="--board") from None
+
+        return read_json(path, "--board", "a board file", parse)
 
     def save(self, path: str | Path) -> Path:
-        path = Path(path)
-        data = {"dictionary": self.dictionary, "markers": {str(k): v.tolist() for k, v in self.markers.items()}}
-        path.write_text(json.dumps(data, indent=1), encoding="utf-8")
-        return path
+        return write_json(
+            path, {"dictionary": self.dictionary, "markers": {str(k): v.tolist() for k, v in self.markers.items()}}
+        )
 
     def cv_dictionary(self):
         cv2 = _aruco()

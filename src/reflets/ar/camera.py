@@ -6,13 +6,12 @@ diag(1, −1, −1) [erratum: the document says OpenCV's x axis points left; it 
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import ArgumentError
+from . import read_json, write_json
 
 CV_TO_GL = np.diag([1.0, -1.0, -1.0])
 
@@ -32,22 +31,15 @@ class Intrinsics:
 
     @classmethod
     def load(cls, path: str | Path) -> Intrinsics:
-        path = Path(path)
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
+        def parse(data: dict) -> Intrinsics:
             K = np.asarray(data["K"], np.float64).reshape(3, 3)
             dist = np.asarray(data.get("dist", [0] * 5), np.float64).reshape(5)
             return cls(K, dist, (int(data["size"][0]), int(data["size"][1])))
-        except FileNotFoundError:
-            raise ArgumentError("file not found", file=path, field="--intrinsics") from None
-        except (ValueError, KeyError, TypeError) as exc:
-            raise ArgumentError(f"not an intrinsics file ({exc})", file=path, field="--intrinsics") from None
+
+        return read_json(path, "--intrinsics", "an intrinsics file", parse)
 
     def save(self, path: str | Path) -> Path:
-        path = Path(path)
-        data = {"K": self.K.tolist(), "dist": self.dist.tolist(), "size": list(self.size)}
-        path.write_text(json.dumps(data, indent=1), encoding="utf-8")
-        return path
+        return write_json(path, {"K": self.K.tolist(), "dist": self.dist.tolist(), "size": list(self.size)})
 
     def gl_projection(self, near: float, far: float) -> np.ndarray:
         """The OpenGL projection matching K exactly (principal point anywhere, skew included): OpenCV puts pixel
