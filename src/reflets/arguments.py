@@ -48,18 +48,26 @@ def check_spp(spp) -> int | None:
     return int(spp)
 
 
-def read_json_list(path: str | Path, field: str, what: str) -> list:
-    """A JSON file holding a list (an event script, a list of strokes): its items, or a one-line error naming the
-    file and the option."""
+def read_json(path: str | Path, field: str, what: str, parse=lambda data: data):
+    """``parse`` of a JSON file's content (an event script, strokes, a board, camera intrinsics), or a one-line
+    error naming the file and the option: a missing file, invalid JSON, a missing key, a wrong shape."""
     import json
 
     path = Path(path)
     try:
-        items = json.loads(path.read_text(encoding="utf-8"))
+        return parse(json.loads(path.read_text(encoding="utf-8")))
     except FileNotFoundError:
         raise ArgumentError("file not found", file=path, field=field) from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ArgumentError(f"not a JSON list of {what}: {exc}", file=path, field=field) from None
-    if not isinstance(items, list):
-        raise ArgumentError(f"must be a JSON list of {what}", file=path, field=field)
-    return items
+    except (ValueError, KeyError, TypeError, IndexError, UnicodeDecodeError) as exc:
+        raise ArgumentError(f"not {what} ({exc})", file=path, field=field) from None
+
+
+def read_json_list(path: str | Path, field: str, what: str) -> list:
+    """A JSON file holding a list (an event script, a list of strokes)."""
+
+    def as_list(data):
+        if not isinstance(data, list):
+            raise TypeError("the file must hold a JSON list")
+        return data
+
+    return read_json(path, field, f"a JSON list of {what}", as_list)

@@ -83,15 +83,18 @@ def max_relative_error(image: np.ndarray, exact: np.ndarray, mask: np.ndarray, f
     return float(np.max(np.abs(image - exact)[keep] / exact[keep])) if np.any(keep) else 0.0
 
 
-def polygon_irradiance(points: np.ndarray, normals: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+def polygon_irradiance(
+    points: np.ndarray, normals: np.ndarray, polygon: np.ndarray, tolerance: float = 0.0
+) -> np.ndarray:
     """Irradiance at ``points`` (normals ``normals``) from a polygon of unit radiance, exact (Lambert 1760):
     E = ½ |Σ_i Θ_i (Γ_i · n)|, u_i = normalize(p_i − x), Θ_i = acos(u_i · u_{i+1}), Γ_i = normalize(u_i × u_{i+1}).
 
-    Every vertex must be above each point's horizon (no clipping here; configurations that need it raise).
+    Every vertex must be above each point's horizon, within ``tolerance`` (a polygon already clipped to it has
+    vertices on it, to rounding); no clipping here: configurations that need it raise.
     """
     u = polygon[None, :, :] - points[:, None, :]
     u /= np.linalg.norm(u, axis=-1, keepdims=True)
-    if np.any(np.einsum("nvk,nk->nv", u, normals) < 0):
+    if np.any(np.einsum("nvk,nk->nv", u, normals) < -tolerance):
         raise NotAnalytic("a polygon vertex is below the horizon of a shaded point (clipping not implemented)")
     v = np.roll(u, -1, axis=1)
     theta = np.arccos(np.clip(np.sum(u * v, axis=-1), -1.0, 1.0))

@@ -10,8 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..arguments import read_json
 from ..errors import ArgumentError
-from . import read_json, write_json
+from . import write_json
 
 
 def _aruco():

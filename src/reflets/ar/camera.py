@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import read_json, write_json
+from ..arguments import read_json
+from . import write_json
 
 CV_TO_GL = np.diag([1.0, -1.0, -1.0])
 

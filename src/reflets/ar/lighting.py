@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..validation import polygon_irradiance
+
 #: the cube's face axes, in the order +x, −x, +y, −y, +z, −z
 AXES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], np.float64)
 
@@ -39,15 +41,11 @@ def _clip(polygon: np.ndarray, n: np.ndarray) -> np.ndarray:
 
 
 def _lambert(polygon: np.ndarray, n: np.ndarray) -> float:
-    """∫ max(0, n·ω) dω over the solid angle of a polygon above the horizon (Lambert 1760)."""
+    """∫ max(0, n·ω) dω over the solid angle of a polygon clipped to the hemisphere of n (Lambert's formula,
+    ``validation.polygon_irradiance``)."""
     if len(polygon) < 3:
         return 0.0
-    u = polygon / np.linalg.norm(polygon, axis=1, keepdims=True)
-    v = np.roll(u, -1, axis=0)
-    theta = np.arccos(np.clip(np.sum(u * v, axis=1), -1.0, 1.0))
-    gamma = np.cross(u, v)
-    gamma /= np.maximum(np.linalg.norm(gamma, axis=1, keepdims=True), 1e-300)
-    return float(0.5 * abs(np.sum(theta * (gamma @ n))))
+    return float(polygon_irradiance(np.zeros((1, 3)), n[None], polygon, tolerance=1e-9)[0])
 
 
 def face_weights_exact(normals: np.ndarray) -> np.ndarray:

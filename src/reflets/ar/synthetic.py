@@ -7,22 +7,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..scene.transform import look_at
 from .board import Board, _aruco
-from .camera import Intrinsics
+from .camera import CV_TO_GL, Intrinsics
 
 
 def look_at_pose(eye, target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
-    """The OpenCV pose (R, t: x_cam = R x_world + t) of a camera at ``eye`` looking at ``target``."""
-    eye, target, up = (np.asarray(v, np.float64) for v in (eye, target, up))
-    z = target - eye
-    z /= np.linalg.norm(z)  # OpenCV's camera looks along +z
-    x = np.cross(z, up)
-    if np.linalg.norm(x) < 1e-9:
-        x = np.cross(z, [0.0, 0.0, 1.0])
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)  # down in the image
-    R = np.stack([x, y, z])
-    return R, -R @ eye
+    """The OpenCV pose (R, t: x_cam = R x_world + t) of a camera at ``eye`` looking at ``target``: the OpenGL
+    view of ``scene.transform.look_at`` with the axes flipped."""
+    R = CV_TO_GL @ look_at(eye, target, up)[:3, :3]
+    return R, -R @ np.asarray(eye, np.float64)
 
 
 def render_view(

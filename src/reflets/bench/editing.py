@@ -17,6 +17,7 @@ import time
 import numpy as np
 
 from ..demo import scene_path
+from ..equirect import rotation_y
 
 #: free vertices per brush: the document's six, and two larger ones
 BRUSHES = (14, 32, 89, 217, 420, 656, 5_000, 50_000)
@@ -158,9 +159,7 @@ BAND = (70, 150)
 
 def _turned(point, degrees: float) -> list[float]:
     """A point turned about the y axis (the plate's normal through its centre)."""
-    c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
-    x, y, z = point
-    return [c * x + s * z, y, -s * x + c * z]
+    return (rotation_y(degrees) @ np.asarray(point, np.float64)).tolist()
 
 
 def _predicted_ridge(scene, seed_pixel: tuple[float, float], columns: np.ndarray) -> np.ndarray:

@@ -30,17 +30,51 @@ def wrap(angle: np.ndarray) -> np.ndarray:
     return np.angle(np.exp(1j * np.asarray(angle)))
 
 
-def phi_gradient(mesh: SurfaceMesh, phi: np.ndarray, k: int = 2) -> np.ndarray:
-    """∇φ per vertex in its (t, b) frame, (V, 2): the least-squares slope of the transported angle differences
-    over the 1-ring (eq 4.13)."""
-    i, j = mesh.edges[:, 0], mesh.edges[:, 1]
+def gradient_weights(mesh: SurfaceMesh) -> np.ndarray:
+    """(E, 2): ∂∇φ_i/∂φ_j for each 1-ring edge (i, j) of eq 4.13's regression, (Σ_j x_j x_jᵀ)⁻¹ x_ij: ∇φ is
+    linear in the transported angle differences, so these weights are all the regression there is."""
+    i = mesh.edges[:, 0]
     x, _ = mesh.local(mesh.edges)
-    y = wrap(k * (phi[j] + mesh.transport - phi[i])) / k
-    ata = np.zeros((len(phi), 2, 2))
-    aty = np.zeros((len(phi), 2))
+    ata = np.zeros((len(mesh.positions), 2, 2))
     np.add.at(ata, i, x[:, :, None] * x[:, None, :])
-    np.add.at(aty, i, x * y[:, None])
-    return _solve(ata, aty)
+    ata += 1e-12 * np.trace(ata, axis1=1, axis2=2)[:, None, None] * np.eye(2) + 1e-300 * np.eye(2)
+    return np.einsum("eab,eb->ea", np.linalg.inv(ata)[i], x)
+
+
+def phi_gradient(
+    mesh: SurfaceMesh, phi: np.ndarray, k: int = 2, weights: np.ndarray | None = None, edges=None
+) -> np.ndarray:
+    """∇φ per vertex in its (t, b) frame, (V, 2): the least-squares slope of the transported angle differences
+    over the 1-ring (eq 4.13; ``weights`` from ``gradient_weights``, computed when not given; ``edges``: only
+    the vertices of those edges' first column, zero elsewhere)."""
+    weights = gradient_weights(mesh) if weights is None else weights
+    sel = slice(None) if edges is None else edges
+    i, j = mesh.edges[sel, 0], mesh.edges[sel, 1]
+    y = wrap(k * (phi[j] + mesh.transport[sel] - phi[i])) / k
+    grad = np.zeros((len(phi), 2))
+    np.add.at(grad, i, weights[sel] * y[:, None])
+    return grad
+
+
+def highlight_g(phi: np.ndarray, grad: np.ndarray, w: np.ndarray, h_tb: np.ndarray, h_n: np.ndarray) -> np.ndarray:
+    """g = ∇φ (v·h) + W ū (n·h) (rows alike in every argument; h_tb = h in the (t, b) frame): ℓ is g turned by
+    90° in the tangent plane (eq 4.10)."""
+    u2 = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    v2 = np.stack([-np.sin(phi), np.cos(phi)], axis=1)
+    a = np.einsum("ij,ij->i", v2, h_tb)
+    return grad * a[:, None] + np.einsum("vab,vb->va", w, u2) * h_n[:, None]
+
+
+def laplacian_step(
+    mesh: SurfaceMesh, phi: np.ndarray, where: np.ndarray, weight: float, k: int = 2, edges=None
+) -> np.ndarray:
+    """One damped Laplacian step on the angles at ``where`` (neighbours transported, k-fold wrapped; ``edges``:
+    the 1-ring edges those vertices need, all by default)."""
+    sel = slice(None) if edges is None else edges
+    i, j = mesh.edges[sel, 0], mesh.edges[sel, 1]
+    delta = wrap(k * (phi[j] + mesh.transport[sel] - phi[i])) / k
+    mean = np.bincount(i, delta, len(phi)) / np.maximum(np.bincount(i, minlength=len(phi)), 1)
+    return np.where(where, phi + weight * mean, phi)
 
 
 def weingarten(mesh: SurfaceMesh) -> np.ndarray:
@@ -79,13 +113,10 @@ def highlight_tangents(
 ) -> tuple[np.ndarray, np.ndarray]:
     """ℓ per vertex (V, 3), unnormalised (eq 4.10), and the degenerate vertices (V,) bool: ℓ = 0 (a highlight
     region) or a critical point (h·n > ``CRITICAL_COSINE``)."""
-    grad = phi_gradient(mesh, phi, k)
     w = weingarten(mesh) if w is None else w
-    u2 = np.stack([np.cos(phi), np.sin(phi)], axis=1)
-    v = np.cross(mesh.normals, mesh.field(phi))
-    hv = np.einsum("ij,ij->i", h, v)
+    h_tb = np.stack([np.einsum("ij,ij->i", h, mesh.t), np.einsum("ij,ij->i", h, mesh.b)], axis=1)
     hn = np.einsum("ij,ij->i", h, mesh.normals)
-    g = grad * hv[:, None] + np.einsum("vab,vb->va", w, u2) * hn[:, None]
+    g = highlight_g(phi, phi_gradient(mesh, phi, k), w, h_tb, hn)
     ell = g[:, :1] * mesh.b - g[:, 1:] * mesh.t
     size = np.linalg.norm(ell, axis=1)
     degenerate = (hn > CRITICAL_COSINE) | (size <= 1e-12 * max(float(size.max(initial=0.0)), 1e-300))

@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .analysis import CRITICAL_COSINE, weingarten, wrap
+from .analysis import CRITICAL_COSINE, gradient_weights, highlight_g, laplacian_step, phi_gradient, weingarten
 from .surface import SurfaceMesh
 
 #: weight of the Laplacian smoothing step applied to the free angles after each accepted LM step
@@ -42,15 +42,9 @@ class HighlightProblem:
 
     def __init__(self, mesh: SurfaceMesh, h: np.ndarray, k: int = 2):
         self.mesh, self.k = mesh, k
-        count = len(mesh.positions)
         self.w = weingarten(mesh)
-        i = mesh.edges[:, 0]
-        x, _ = mesh.local(mesh.edges)
-        ata = np.zeros((count, 2, 2))
-        np.add.at(ata, i, x[:, :, None] * x[:, None, :])
-        ata += 1e-12 * np.trace(ata, axis1=1, axis2=2)[:, None, None] * np.eye(2) + 1e-300 * np.eye(2)
-        #: ∂∇φ_i / ∂φ_j for each 1-ring edge (i, j): (Σ x xᵀ)⁻¹ x_ij
-        self.c = np.einsum("eab,eb->ea", np.linalg.inv(ata)[i], x)
+        #: ∂∇φ_i / ∂φ_j for each 1-ring edge (i, j)
+        self.c = gradient_weights(mesh)
         self.h_tb = np.stack([np.einsum("ij,ij->i", h, mesh.t), np.einsum("ij,ij->i", h, mesh.b)], axis=1)
         self.h_n = np.einsum("ij,ij->i", h, mesh.normals)
         self.critical = self.h_n > CRITICAL_COSINE
@@ -62,23 +56,13 @@ class HighlightProblem:
         return np.flatnonzero(inside[self.mesh.edges[:, 0]])
 
     def gradient(self, phi: np.ndarray, edges: np.ndarray | None = None) -> np.ndarray:
-        """∇φ per vertex (V, 2), eq 4.13 with wrapped differences (only at the vertices of ``edges``' first
-        column when a subset is given; zero elsewhere)."""
-        sel = slice(None) if edges is None else edges
-        i, j = self.mesh.edges[sel, 0], self.mesh.edges[sel, 1]
-        y = wrap(self.k * (phi[j] + self.mesh.transport[sel] - phi[i])) / self.k
-        grad = np.zeros((len(phi), 2))
-        np.add.at(grad, i, self.c[sel] * y[:, None])
-        return grad
+        """∇φ (V, 2), at the vertices of ``edges``' first column when a subset is given (zero elsewhere)."""
+        return phi_gradient(self.mesh, phi, self.k, self.c, edges)
 
     def g(self, phi: np.ndarray, grad: np.ndarray | None = None, rows=slice(None)) -> np.ndarray:
-        """g = ∇φ (v·h) + W ū (n·h) at ``rows`` (ℓ is g turned by 90° in the tangent plane: eq 4.10)."""
+        """``analysis.highlight_g`` at ``rows``."""
         grad = self.gradient(phi) if grad is None else grad
-        p = phi[rows]
-        u2 = np.stack([np.cos(p), np.sin(p)], axis=1)
-        v2 = np.stack([-np.sin(p), np.cos(p)], axis=1)
-        a = np.einsum("ij,ij->i", v2, self.h_tb[rows])
-        return grad[rows] * a[:, None] + np.einsum("vab,vb->va", self.w[rows], u2) * self.h_n[rows][:, None]
+        return highlight_g(phi[rows], grad[rows], self.w[rows], self.h_tb[rows], self.h_n[rows])
 
     def angles(
         self, phi: np.ndarray, rows=slice(None), edges: np.ndarray | None = None
@@ -125,14 +109,6 @@ class HighlightProblem:
         n_free = int(free_index.max()) + 1 if (free_index >= 0).any() else 0
         jac = sp.coo_matrix((values, (entries_r, entries_c)), shape=(len(rows), n_free)).tocsr()
         return np.arctan2(g[:, 0], -g[:, 1]), jac
-
-    def smooth(self, phi: np.ndarray, free: np.ndarray, edges: np.ndarray, weight: float = SMOOTHING) -> np.ndarray:
-        """One damped Laplacian step on the free angles (``edges``: their 1-ring edges; neighbours transported,
-        k-fold wrapped)."""
-        i, j = self.mesh.edges[edges, 0], self.mesh.edges[edges, 1]
-        delta = wrap(self.k * (phi[j] + self.mesh.transport[edges] - phi[i])) / self.k
-        mean = np.bincount(i, delta, len(phi)) / np.maximum(np.bincount(i, minlength=len(phi)), 1)
-        return np.where(free, phi + weight * mean, phi)
 
 
 def target_angles(mesh: SurfaceMesh, ell: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -204,7 +180,7 @@ def solve(
         else:
             result.solve_ms.append(1e3 * (time.perf_counter() - start))
             break  # no step lowers the energy: a (local) minimum
-        phi = problem.smooth(trial, free, free_edges, smoothing) if smoothing > 0 else trial
+        phi = laplacian_step(mesh, trial, free, smoothing, problem.k, free_edges) if smoothing > 0 else trial
         r = residuals(phi)
         if r @ r > r_trial @ r_trial * 1.5:  # smoothing that undoes the step: keep the step alone
             phi, r = trial, r_trial

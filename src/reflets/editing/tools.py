@@ -113,7 +113,7 @@ def stencil(mesh: SurfaceMesh, phi: np.ndarray, h: np.ndarray, brush: Brush, smo
     """The stencil (§4.3): inside the brush u = h × n (h·u = 0 everywhere: a highlight *region*, the shape of
     the brush), then ``smoothing`` Laplacian steps on a band at the brush's border (the region is unstable
     there: the field jumps from the stencil to the surrounding one). Returns the new angles."""
-    from .analysis import wrap
+    from .analysis import laplacian_step
 
     near, xy = brush.coordinates(mesh, margin=1.15)
     r = np.linalg.norm(xy, axis=1)
@@ -123,11 +123,8 @@ def stencil(mesh: SurfaceMesh, phi: np.ndarray, h: np.ndarray, brush: Brush, smo
     ok = inside & (np.linalg.norm(u, axis=1) > 1e-9)  # h ∥ n: a critical point, any u
     phi[ok] = mesh.angles(u)[ok]
     band = near & (r > 0.85) & (r < 1.15)
-    i, j = mesh.edges[:, 0], mesh.edges[:, 1]
     for _ in range(smoothing):
-        delta = wrap(2.0 * (phi[j] + mesh.transport - phi[i])) / 2.0
-        mean = np.bincount(i, delta, len(phi)) / np.maximum(np.bincount(i, minlength=len(phi)), 1)
-        phi = np.where(band, phi + 0.5 * mean, phi)
+        phi = laplacian_step(mesh, phi, band, 0.5)
     return phi
 
 
@@ -139,7 +136,7 @@ def light_tool(
     h(θ) = cos θ n + sin θ v; each gives an incoming direction ω_in = 2 (h·ω_out) h − ω_out, kept when
     n·ω_in > ε (ε = π/8, the document's cosine threshold), and its ℓ (eq 4.10); the best match of an exhaustive
     search wins. Returns (ω_in, the angle in degrees between its ℓ and the target)."""
-    from .analysis import phi_gradient, weingarten
+    from .analysis import highlight_g, phi_gradient, weingarten
 
     n, u = mesh.normals[vertex], mesh.field(phi)[vertex]
     v = np.cross(n, u)
@@ -151,11 +148,10 @@ def light_tool(
     valid = incoming @ n > np.pi / 8
     if not valid.any():
         raise ValueError("no light direction above the surface makes a highlight there from this view")
-    grad = phi_gradient(mesh, phi, k)[vertex]
-    w = weingarten(mesh)[vertex]
-    u2 = np.array([np.cos(phi[vertex]), np.sin(phi[vertex])])
-    hv, hn = h @ v, h @ n
-    g = grad[None, :] * hv[:, None] + (w @ u2)[None, :] * hn[:, None]
+    m = len(h)  # eq 4.10 at the vertex, once per candidate half vector
+    h_tb = np.stack([h @ mesh.t[vertex], h @ mesh.b[vertex]], axis=1)
+    grad = np.broadcast_to(phi_gradient(mesh, phi, k)[vertex], (m, 2))
+    g = highlight_g(np.full(m, phi[vertex]), grad, np.broadcast_to(weingarten(mesh)[vertex], (m, 2, 2)), h_tb, h @ n)
     ell = g[:, :1] * mesh.b[vertex] - g[:, 1:] * mesh.t[vertex]
     target = np.asarray(ell_target, np.float64)
     cos = np.abs(ell @ target) / np.maximum(np.linalg.norm(ell, axis=1) * np.linalg.norm(target), 1e-300)

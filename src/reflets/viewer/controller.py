@@ -120,7 +120,10 @@ class ViewerController(Painting):
             if self.reference.error:
                 status["reference_error"] = self.reference.error
             if self.reference.image is not None and self.image is not None:
-                status["relmse"] = relmse(self.image, self.reference.image)
+                key = (id(self.image), id(self.reference.image))  # the panels ask every frame: once per pair
+                if getattr(self, "_relmse_key", None) != key:
+                    self._relmse_key, self._relmse = key, relmse(self.image, self.reference.image)
+                status["relmse"] = self._relmse
         return status
 
     def selection_label(self) -> str:
