@@ -162,20 +162,26 @@ def cmd_ar_board(args) -> int:
     return 0
 
 
-def cmd_ar_track(args) -> int:
+def _read_grey_images(names: list[str]) -> list[np.ndarray]:
+    """Camera images as grey uint8 arrays, what marker detection reads; an unreadable one is named."""
     from PIL import Image
 
+    frames = []
+    for name in names:
+        try:
+            frames.append(np.asarray(Image.open(name).convert("L")))
+        except (OSError, ValueError) as exc:
+            raise ArgumentError(f"cannot read the image ({exc})", file=name) from None
+    return frames
+
+
+def cmd_ar_track(args) -> int:
     from .ar.board import Board
     from .ar.camera import Intrinsics
     from .ar.tracking import track
 
     board, intrinsics = Board.load(args.board), Intrinsics.load(args.intrinsics)
-    frames = []
-    for name in args.images:
-        try:
-            frames.append(np.asarray(Image.open(name).convert("L")))
-        except (OSError, ValueError) as exc:
-            raise ArgumentError(f"cannot read the image ({exc})", file=name) from None
+    frames = _read_grey_images(args.images)
     poses = track(frames, board, intrinsics)
     views = [
         {"image": str(name), "R_world_to_cam": p.R.tolist(), "t_world_to_cam": p.t.tolist(), "markers": p.markers}
@@ -186,6 +192,23 @@ def cmd_ar_track(args) -> int:
     Path(args.output).write_text(json.dumps({"views": views}, indent=1), encoding="utf-8")
     found = sum(p is not None for p in poses)
     print(f"wrote {args.output}: a pose for {found} of {len(poses)} images")
+    return 0
+
+
+def cmd_ar_calibrate(args) -> int:
+    from .ar.board import Board
+    from .ar.calibration import MIN_MARKERS, calibrate
+    from .imageio import check_output_path
+
+    out = check_output_path(args.output, (".json",))
+    board = Board.load(args.board)
+    result = calibrate(_read_grey_images(args.images), board, names=args.images)
+    K, dist = result.intrinsics.K, result.intrinsics.dist
+    print(f"fx {K[0, 0]:.2f}  fy {K[1, 1]:.2f}  cx {K[0, 2]:.2f}  cy {K[1, 2]:.2f}")
+    print("dist (k1 k2 p1 p2 k3) " + " ".join(f"{d:.5f}" for d in dist))
+    print(f"RMS reprojection error {result.rms:.3f} px over {result.views_used} of {len(result.markers)} images "
+          f"(those with {MIN_MARKERS} markers or more)")  # fmt: skip
+    print(f"wrote {result.intrinsics.save(out)}")
     return 0
 
 
@@ -464,6 +487,11 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--board", required=True, help="board.json")
     q.add_argument("-o", "--output", required=True, help="poses.json")
     q.set_defaults(func=cmd_ar_track)
+    q = ar.add_parser("calibrate", help="camera intrinsics from images of a board: camera.json (K, dist, size)")
+    q.add_argument("images", nargs="+", help="images of the board, one size, from varied and tilted viewpoints")
+    q.add_argument("--board", required=True, help="board.json")
+    q.add_argument("-o", "--output", required=True, help="camera.json")
+    q.set_defaults(func=cmd_ar_calibrate)
 
     p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
     p.add_argument("scene", help="scene file (.toml)")

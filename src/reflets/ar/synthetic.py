@@ -1,7 +1,8 @@
 """Views of a marker board with known poses — the test data of the tracking (real photographs are not available
 offline: these are generated, and say so). A planar board seen by a pinhole camera is exactly a projective
 warp of its top view: each pixel's ray meets the plane y = 0, the board image is sampled there (bilinear),
-paper elsewhere a mid grey; then optional Gaussian blur (σ in pixels), brightness gain and noise."""
+paper elsewhere a mid grey; then optional Gaussian blur (σ in pixels), brightness gain and noise. A lens with
+distortion bends each pixel's ray: its position is undistorted (the inverse of OpenCV's model) first."""
 
 from __future__ import annotations
 
@@ -29,12 +30,16 @@ def render_view(
     gain: float = 1.0,
     seed: int = 0,
 ) -> np.ndarray:
-    """A grey uint8 image (H, W) of the board seen with pose (R, t) through a distortion-free ``intrinsics``."""
+    """A grey uint8 image (H, W) of the board seen with pose (R, t) through ``intrinsics``, its lens distortion
+    included."""
     cv2 = _aruco()
     top, to_pixel = board.image()
     w, h = intrinsics.size
     u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
-    rays_cam = np.linalg.solve(intrinsics.K, np.stack([u.ravel(), v.ravel(), np.ones(u.size)]))
+    if np.any(intrinsics.dist != 0):
+        rays_cam = _undistorted_rays(u.ravel(), v.ravel(), intrinsics)
+    else:  # the pinhole path, kept exactly as before distortion was modelled
+        rays_cam = np.linalg.solve(intrinsics.K, np.stack([u.ravel(), v.ravel(), np.ones(u.size)]))
     rays = R.T @ rays_cam  # world directions
     centre = -R.T @ t
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -53,3 +58,19 @@ def render_view(
     if noise > 0:
         image = image + np.random.default_rng(seed).normal(0.0, noise, image.shape)
     return np.clip(np.round(image), 0, 255).astype(np.uint8)
+
+
+def _undistorted_rays(u: np.ndarray, v: np.ndarray, intrinsics: Intrinsics) -> np.ndarray:
+    """Camera-frame rays (3, N) of the pixels (u, v) seen through a lens with distortion: the ideal pinhole
+    positions they come from, by ``cv2.undistortPoints``, in normalized coordinates (z = 1). Its iteration runs
+    to convergence: OpenCV's default (5 iterations) leaves an error that grows with the distortion, and these
+    views are test data."""
+    cv2 = _aruco()
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10)
+    pixels = np.stack([u, v], axis=1).reshape(-1, 1, 2)
+    if hasattr(cv2, "undistortPointsIter"):  # OpenCV 4 takes the criteria here
+        normalized = cv2.undistortPointsIter(pixels, intrinsics.K, intrinsics.dist, None, None, criteria)
+    else:  # OpenCV 5, in undistortPoints
+        normalized = cv2.undistortPoints(pixels, intrinsics.K, intrinsics.dist, None, None, None, criteria)
+    normalized = normalized.reshape(-1, 2)
+    return np.stack([normalized[:, 0], normalized[:, 1], np.ones(len(normalized))])
