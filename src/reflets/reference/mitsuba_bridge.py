@@ -426,6 +426,8 @@ def to_mitsuba_dict(
         alpha = background == "alpha"
 
     cam = scene.camera
+    if cam.pixel_aspect != 1.0:
+        raise SceneError("Mitsuba 3's perspective camera has square pixels only", field="camera.pixel_aspect")
     near, far = clip_planes(np.asarray(cam.position, dtype=np.float64), _scene_points(scene, positions))
     out["sensor"] = {
         "type": "perspective",
@@ -434,6 +436,9 @@ def to_mitsuba_dict(
         "near_clip": float(near),
         "far_clip": float(max(2.0 * far, 10.0 * near)),
         "to_world": _transform(look_at_matrix(cam.position, cam.look_at, cam.up)),
+        # Mitsuba moves the principal point the other way (measured: tests/scene/test_camera_intrinsics.py)
+        "principal_point_offset_x": -float(cam.principal_offset[0]),
+        "principal_point_offset_y": -float(cam.principal_offset[1]),
         "film": {
             "type": "hdrfilm",
             "width": width,

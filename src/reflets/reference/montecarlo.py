@@ -27,7 +27,7 @@ from typing import Literal
 import numpy as np
 
 from ..errors import ArgumentError
-from ..scene.camera import camera_basis
+from ..scene.camera import camera_basis, local_directions
 from ..scene.environment import load_environment
 from ..scene.lightmask import load_masks
 from ..scene.model import DirectionalLight, PointLight, Scene
@@ -160,11 +160,7 @@ class MonteCarloReference:
 
     def _camera_rays(self, rows: np.ndarray, cols: np.ndarray, width: int, height: int):
         cam = self.scene.camera
-        tan_half = np.tan(np.radians(cam.fov_y) / 2.0)
-        x = (2.0 * cols / width - 1.0) * tan_half * width / height
-        y = (1.0 - 2.0 * rows / height) * tan_half
-        local = np.stack([x, y, -np.ones_like(x)], axis=-1)
-        dirs = local @ camera_basis(cam)
+        dirs = local_directions(cam, cols, rows, width, height) @ camera_basis(cam)
         return np.asarray(cam.position, dtype=np.float64), dirs / np.linalg.norm(dirs, axis=-1, keepdims=True)
 
     def _escaped(self, dirs: np.ndarray) -> np.ndarray:

@@ -36,6 +36,16 @@ class Camera(Strict):
     look_at: Vec3
     up: Vec3 = (0.0, 1.0, 0.0)
     fov_y: Annotated[float, Field(gt=0, lt=180, allow_inf_nan=False)] = 45.0
+    principal_offset: tuple[Annotated[float, Field(ge=-1, le=1, allow_inf_nan=False)], ...] = Field(
+        (0.0, 0.0),
+        min_length=2,
+        max_length=2,
+        description="the principal point's offset from the image centre in fractions of the image's width and "
+        "height (x right, y down): a calibrated camera's (cx, cy) off centre (Mitsuba's principal_point_offset)",
+    )
+    pixel_aspect: Annotated[float, Field(gt=0.1, lt=10, allow_inf_nan=False)] = Field(
+        1.0, description="horizontal over vertical focal length (fx / fy of a calibrated camera; fov_y is vertical)"
+    )
     size: tuple[Annotated[int, Field(ge=1, le=MAX_IMAGE_SIDE)], Annotated[int, Field(ge=1, le=MAX_IMAGE_SIDE)]] = (
         640,
         480,

@@ -29,13 +29,14 @@ from pydantic import Field
 from ..equirect import rotation_y
 from ..errors import ArgumentError
 from ..gpu import FrameTimer, ProgramSpec, get_program, release_objects, set_uniforms
+from ..scene.camera import projection_matrix
 from ..scene.emitters import area_light_samples, polygon_normal
 from ..scene.environment import environment_grid
 from ..scene.geometry import clip_planes_of_sphere
 from ..scene.lightmask import mask_lookup
 from ..scene.meshdata import MeshData
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
-from ..scene.transform import look_at, perspective
+from ..scene.transform import look_at
 from .base import Technique, TechniqueParams, register_technique
 from .ibl import IBL_FLAGS
 from .prepared import PreparedScene
@@ -330,7 +331,7 @@ class Forward(Technique):
         """(view, projection) for the scene camera at the given image size (row-major NumPy)."""
         cam = self.scene.camera
         view = look_at(cam.position, cam.look_at, cam.up)
-        proj = perspective(cam.fov_y, width / height, self._near, self._far)
+        proj = projection_matrix(cam, width, height, self._near, self._far)
         return view, proj
 
     def render(self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int | None = None) -> np.ndarray:
