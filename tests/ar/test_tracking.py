@@ -80,3 +80,22 @@ def test_the_commands_write_a_board_and_the_poses(tmp_path, capsys):
                  str(tmp_path / "board.json"), "-o", str(out)]) == 2  # fmt: skip
     assert "none.json: --intrinsics: file not found" in capsys.readouterr().err
     assert main(["ar", "board", "-o", str(tmp_path / "b.json"), "--dictionary", "DICT_NOPE"]) == 2
+
+
+def test_renderer_camera_of_a_pose_projects_like_opencv():
+    """The scene camera built from K and a pose puts world points where cv2.projectPoints does (principal point
+    off centre, fx ≠ fy)."""
+    import cv2
+
+    from reflets.ar.camera import camera_fields
+    from reflets.scene.camera import project
+    from reflets.scene.model import Camera
+
+    K = np.array([[530.0, 0, 331.7], [0, 552.0, 228.4], [0, 0, 1]])
+    intrinsics = Intrinsics(K, np.zeros(5), (640, 480))
+    R, t = look_at_pose((0.3, 0.5, 0.6), (0.02, 0, -0.03))
+    camera = Camera(**camera_fields(intrinsics, R, t))
+    points = np.random.default_rng(1).uniform(-0.15, 0.15, (50, 3))
+    expected = cv2.projectPoints(points, cv2.Rodrigues(R)[0], t, K, None)[0].reshape(-1, 2)
+    # reflets' pixel centres are at half-integers, OpenCV's at integers
+    assert np.abs(project(camera, points) - 0.5 - expected).max() < 1e-6

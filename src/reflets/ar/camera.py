@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..arguments import read_json
+from ..errors import ArgumentError
 from . import write_json
 
 CV_TO_GL = np.diag([1.0, -1.0, -1.0])
@@ -64,3 +65,25 @@ def gl_view(R_world_to_cam: np.ndarray, t_world_to_cam: np.ndarray) -> np.ndarra
     view[:3, :3] = CV_TO_GL @ R_world_to_cam
     view[:3, 3] = CV_TO_GL @ np.asarray(t_world_to_cam, np.float64)
     return view
+
+
+def camera_fields(intrinsics: Intrinsics, R_world_to_cam: np.ndarray, t_world_to_cam: np.ndarray) -> dict:
+    """The reflets scene camera (``[camera]`` fields) of a pose seen through ``intrinsics``: eye −Rᵀt, looking
+    along OpenCV's +z, up −y; the vertical field of view from fy, the principal point as ``principal_offset``
+    (fractions of the image from its centre; pixel centres at OpenCV's integers), fx / fy as ``pixel_aspect``.
+    Lens distortion is not modelled by the renderer (undistort the photograph first); skew must be zero."""
+    (fx, skew, cx), (_, fy, cy) = intrinsics.K[0], intrinsics.K[1]
+    if abs(skew) > 1e-6 * fx:
+        raise ArgumentError("the renderer's camera has no skew: K[0][1] must be 0", field="K")
+    w, h = intrinsics.size
+    R = np.asarray(R_world_to_cam, np.float64)
+    eye = -R.T @ np.asarray(t_world_to_cam, np.float64)
+    return {
+        "position": eye.tolist(),
+        "look_at": (eye + R[2]).tolist(),
+        "up": (-R[1]).tolist(),
+        "fov_y": float(np.degrees(2.0 * np.arctan(0.5 * h / fy))),
+        "size": [int(w), int(h)],
+        "principal_offset": [float((cx + 0.5) / w - 0.5), float((cy + 0.5) / h - 0.5)],
+        "pixel_aspect": float(fx / fy),
+    }

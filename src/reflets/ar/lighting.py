@@ -2,7 +2,8 @@
 the six faces of the face's mean radiance L̄_F times W_F(n) = ∫_F max(0, n·ω) dω, the clamped-cosine solid
 angle of the face. Σ_F W_F(n) = π for every n (the clamped cosine's integral over the sphere).
 
-- ``face_weights_exact``: W_F by Lambert's polygon formula on the face square clipped to the hemisphere of n;
+- ``face_weights_exact``: W_F by Lambert's polygon formula on the face square clipped to the hemisphere of n
+  (vectorised over normals);
 - ``face_weights_fit``: the document's cheap fit max(0.75 + cos θ, 0)² / 1.75 (cos θ = n·a_F) — which does *not*
   sum to π [erratum noted in the digest: a constant environment comes out a few percent off, with a ripple];
 - ``face_weights_normalised``: the fit rescaled so that its sum is π.
@@ -11,8 +12,6 @@ angle of the face. Σ_F W_F(n) = π for every n (the clamped cosine's integral o
 from __future__ import annotations
 
 import numpy as np
-
-from ..validation import polygon_irradiance
 
 #: the cube's face axes, in the order +x, −x, +y, −y, +z, −z
 AXES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], np.float64)
@@ -27,32 +26,45 @@ def _face_square(axis: np.ndarray) -> np.ndarray:
     return np.array([axis - u - v, axis + u - v, axis + u + v, axis - u + v])
 
 
-def _clip(polygon: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """The part of a convex planar polygon with n·x ≥ 0 (Sutherland–Hodgman, one plane through the origin)."""
-    out = []
-    d = polygon @ n
-    for k in range(len(polygon)):
-        a, b, da, db = polygon[k], polygon[(k + 1) % len(polygon)], d[k], d[(k + 1) % len(polygon)]
-        if da >= 0:
-            out.append(a)
-        if (da >= 0) != (db >= 0):
-            out.append(a + (b - a) * (da / (da - db)))
-    return np.array(out)
+def _clipped_squares(square: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """The face square clipped to each normal's hemisphere (Sutherland–Hodgman, one plane through the origin),
+    vectorised over normals: (N, 8, 3) vertices, each polygon padded by repeating its last vertex (an empty one:
+    all zeros), so that padding adds only zero-length edges."""
+    d = normals @ square.T  # (N, 4)
+    a, b = square, np.roll(square, -1, axis=0)
+    da, db = d, np.roll(d, -1, axis=1)
+    keep = da >= 0
+    crosses = keep != (db >= 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.where(crosses, da / (da - db), 0.0)
+    crossing = a[None] + (b - a)[None] * s[..., None]  # (N, 4, 3)
+    candidates = np.stack([np.broadcast_to(a, crossing.shape), crossing], axis=2).reshape(len(normals), 8, 3)
+    valid = np.stack([keep, crosses], axis=2).reshape(len(normals), 8)
+    order = np.argsort(~valid, axis=1, kind="stable")  # the valid vertices first, in order
+    vertices = np.take_along_axis(candidates, order[..., None], axis=1)
+    count = valid.sum(axis=1)
+    last = np.take_along_axis(vertices, np.maximum(count - 1, 0)[:, None, None], axis=1)
+    pad = np.arange(8)[None, :] >= count[:, None]
+    return np.where(pad[..., None], last, vertices) * (count >= 3)[:, None, None]
 
 
-def _lambert(polygon: np.ndarray, n: np.ndarray) -> float:
-    """∫ max(0, n·ω) dω over the solid angle of a polygon clipped to the hemisphere of n (Lambert's formula,
-    ``validation.polygon_irradiance``)."""
-    if len(polygon) < 3:
-        return 0.0
-    return float(polygon_irradiance(np.zeros((1, 3)), n[None], polygon, tolerance=1e-9)[0])
+def _lambert(polygons: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """∫ n·ω dω over each polygon (N, V, 3), all above n's horizon (Lambert's formula, as
+    ``validation.polygon_irradiance``; zero-length edges add nothing)."""
+    length = np.linalg.norm(polygons, axis=-1, keepdims=True)
+    u = polygons / np.maximum(length, 1e-300)
+    v = np.roll(u, -1, axis=1)
+    theta = np.arccos(np.clip(np.sum(u * v, axis=-1), -1.0, 1.0))
+    gamma = np.cross(u, v)
+    gamma /= np.maximum(np.linalg.norm(gamma, axis=-1, keepdims=True), 1e-300)
+    return 0.5 * np.abs(np.sum(theta * np.einsum("nvk,nk->nv", gamma, normals), axis=1))
 
 
 def face_weights_exact(normals: np.ndarray) -> np.ndarray:
     """W_F(n) for each normal (N, 3) and face (N, 6), exact."""
     normals = np.atleast_2d(np.asarray(normals, np.float64))
-    squares = [_face_square(axis) for axis in AXES]
-    return np.array([[_lambert(_clip(square, n), n) for square in squares] for n in normals])
+    normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    return np.stack([_lambert(_clipped_squares(_face_square(axis), normals), normals) for axis in AXES], axis=1)
 
 
 def face_weights_fit(normals: np.ndarray) -> np.ndarray:

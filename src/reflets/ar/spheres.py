@@ -5,6 +5,7 @@ samples, its radius their mean distance — until no assignment changes (at most
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 
 def surface_samples(positions: np.ndarray, faces: np.ndarray, count: int, seed: int = 0) -> np.ndarray:
@@ -23,22 +24,22 @@ def decompose(samples: np.ndarray, count: int, seed: int = 0, iterations: int = 
     """(centres (K, 3), radii (K,)) of ``count`` spheres fitted to surface samples by k-means (k-means++ start)."""
     rng = np.random.default_rng(seed)
     centres = [samples[rng.integers(len(samples))]]
+    d2 = ((samples - centres[0]) ** 2).sum(-1)  # each sample's squared distance to its nearest centre so far
     for _ in range(1, count):  # k-means++: far points first
-        d2 = np.min(((samples[:, None] - np.array(centres)[None]) ** 2).sum(-1), axis=1)
         centres.append(samples[rng.choice(len(samples), p=d2 / d2.sum())])
+        d2 = np.minimum(d2, ((samples - centres[-1]) ** 2).sum(-1))
     centres = np.array(centres)
     assign = None
     for _ in range(iterations):
-        new = np.argmin(((samples[:, None] - centres[None]) ** 2).sum(-1), axis=1)
+        new = cKDTree(centres).query(samples)[1]  # the nearest centre of each sample
         if assign is not None and np.array_equal(new, assign):
             break
         assign = new
-        for k in range(count):
-            members = samples[assign == k]
-            if len(members):
-                centres[k] = members.mean(axis=0)
-    radii = np.array(
-        [np.linalg.norm(samples[assign == k] - centres[k], axis=1).mean() if np.any(assign == k) else 0.0
-         for k in range(count)]
-    )  # fmt: skip
+        counts = np.bincount(assign, minlength=count)
+        sums = np.stack([np.bincount(assign, samples[:, k], minlength=count) for k in range(3)], axis=1)
+        filled = counts > 0
+        centres[filled] = sums[filled] / counts[filled, None]
+    distance = np.linalg.norm(samples - centres[assign], axis=1)
+    counts = np.bincount(assign, minlength=count)
+    radii = np.bincount(assign, distance, minlength=count) / np.maximum(counts, 1)
     return centres, radii
