@@ -162,14 +162,15 @@ def cmd_ar_board(args) -> int:
     return 0
 
 
-def _read_grey_images(names: list[str]) -> list[np.ndarray]:
-    """Camera images as grey uint8 arrays, what marker detection reads; an unreadable one is named."""
+def _read_grey_images(names: list[str], mode: str = "L") -> list[np.ndarray]:
+    """Camera images as uint8 arrays, grey (what marker detection reads) or ``mode="RGB"``; an unreadable one
+    is named."""
     from PIL import Image
 
     frames = []
     for name in names:
         try:
-            frames.append(np.asarray(Image.open(name).convert("L")))
+            frames.append(np.asarray(Image.open(name).convert(mode)))
         except (OSError, ValueError) as exc:
             raise ArgumentError(f"cannot read the image ({exc})", file=name) from None
     return frames
@@ -209,6 +210,88 @@ def cmd_ar_calibrate(args) -> int:
     print(f"RMS reprojection error {result.rms:.3f} px over {result.views_used} of {len(result.markers)} images "
           f"(those with {MIN_MARKERS} markers or more)")  # fmt: skip
     print(f"wrote {result.intrinsics.save(out)}")
+    return 0
+
+
+def _ar_session(args, objects_path: str):
+    """The board, the intrinsics and a Session for ``reflets ar composite`` / ``ar run``."""
+    from .ar.board import Board
+    from .ar.camera import Intrinsics
+    from .ar.capture import CubeMap
+    from .ar.session import CUBE_SIZE, Session
+    from .arguments import as_scene
+    from .imageio import read_image
+
+    board, intrinsics = Board.load(args.board), Intrinsics.load(args.intrinsics)
+    objects = as_scene(objects_path)
+    cube = None
+    if args.environment:  # a light probe instead of the capture
+        cube = CubeMap.from_equirect(read_image(args.environment), CUBE_SIZE)
+    if args.radius is not None and args.radius <= 0:
+        raise ArgumentError(f"must be positive, got {args.radius}", field="--radius")
+    return Session(objects, board, intrinsics, mode=args.mode, radius=args.radius, cube=cube,
+                   supersample=args.supersample, method=args.method)  # fmt: skip
+
+
+def _check_frame_size(frame: np.ndarray, intrinsics, **where) -> None:
+    """A frame must be the size the intrinsics were calibrated at (``where``: the error's file or field)."""
+    if tuple(frame.shape[1::-1]) != tuple(intrinsics.size):
+        w, h = intrinsics.size
+        raise ArgumentError(f"is {frame.shape[1]}x{frame.shape[0]}, the intrinsics are for {w}x{h}", **where)
+
+
+def _print_timings(timings: list[dict[str, float]]) -> None:
+    stages = sorted({k for t in timings for k in t}, key=lambda k: (k == "frame_ms", k))
+    cells = [f"{k[:-3]} {np.median([t[k] for t in timings if k in t]):.1f}" for k in stages]
+    print("median ms per stage: " + ", ".join(cells))
+
+
+def cmd_ar_composite(args) -> int:
+    from .imageio import check_output_path, write_png8
+
+    out = check_output_path(args.output, (".png",))
+    (background,) = _read_grey_images([args.background], "RGB")
+    captures = _read_grey_images(args.capture or [], "RGB")
+    session = _ar_session(args, args.scene)
+    _check_frame_size(background, session.intrinsics, file=args.background)
+    pose = session.track(background)  # its own markers: never a pose kept from another frame
+    if pose is None:
+        raise ArgumentError("the board's markers are not found in the background frame", file=args.background)
+    tracked = 0
+    for frame, name in zip(captures, args.capture or [], strict=True):
+        _check_frame_size(frame, session.intrinsics, file=name)
+        tracked += session.process(frame, composite=False).pose is not None
+    result = session.process(background, pose=pose)
+    if captures:
+        print(f"captured {tracked} of {len(captures)} frames (the others: no board found)")
+    _print_timings([result.timings])
+    changed = result.composite.changed.mean()
+    print(f"{changed:.1%} of the pixels changed; wrote {write_png8(out, result.composite.image)}")
+    return 0
+
+
+def cmd_ar_run(args) -> int:
+    from .ar.video import FrameSink, FrameSource
+
+    source = FrameSource.open(args.inputs, args.webcam)
+    sink = FrameSink.open(args.output)
+    session = _ar_session(args, args.scene)
+    timings, shown, posed = [], 0, 0
+    try:
+        for frame in source.frames(limit=args.frames):
+            _check_frame_size(frame, session.intrinsics, field="input frame")
+            result = session.process(frame)
+            sink.write(result.composite.image if result.composite is not None else frame)
+            timings.append(result.timings)
+            shown += 1
+            posed += result.pose is not None
+    finally:
+        sink.close()
+    if shown == 0:
+        raise ArgumentError("no frame could be read", field="input")
+    print(f"{shown} frames, a pose in {posed}")
+    _print_timings(timings)
+    print(f"wrote {sink.describe()}")
     return 0
 
 
@@ -492,6 +575,35 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--board", required=True, help="board.json")
     q.add_argument("-o", "--output", required=True, help="camera.json")
     q.set_defaults(func=cmd_ar_calibrate)
+    for name, helptext in (
+        ("composite", "virtual objects lit by the captured environment, composited into a photograph: out.png"),
+        ("run", "the live loop (detect, pose, capture, shade, composite) on a video, a camera or images"),
+    ):
+        q = ar.add_parser(name, help=helptext)
+        q.add_argument("scene", help="the virtual objects (.toml; board units, board frame: y up, the board at y = 0)")
+        if name == "composite":
+            q.add_argument("--background", required=True, help="the photograph to composite into (shows the board)")
+            q.add_argument("--capture", nargs="+", help="frames (showing the board) captured into the environment")
+            q.add_argument("-o", "--output", required=True, help="out.png")
+            q.set_defaults(func=cmd_ar_composite)
+        else:
+            q.add_argument("inputs", nargs="*", help="a video file or images (or --webcam N)")
+            q.add_argument("--webcam", type=int, help="a camera index (OpenCV's VideoCapture)")
+            q.add_argument("--frames", type=int, help="stop after this many frames")
+            q.add_argument("-o", "--output", required=True, help="a video (.mp4, .avi) or a folder of PNG frames")
+            q.set_defaults(func=cmd_ar_run)
+        q.add_argument("--intrinsics", required=True, help="camera.json")
+        q.add_argument("--board", required=True, help="board.json")
+        q.add_argument(
+            "--mode",
+            choices=("differential", "document"),
+            default="differential",
+            help="differential rendering over reflets' IBL (default), or the document's lighting",
+        )
+        q.add_argument("--radius", type=float, help="scene radius for the capture's parallax correction (board units)")
+        q.add_argument("--environment", help="an HDR equirect light probe instead of the capture")
+        q.add_argument("--supersample", type=int, default=2, help="s × s subpixels per pixel (1-4, default 2)")
+        q.add_argument("--method", help="the renderer's method in the differential mode (default auto)")
 
     p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
     p.add_argument("scene", help="scene file (.toml)")

@@ -168,6 +168,12 @@ def flip(test: np.ndarray, ref: np.ndarray, mode: str = "HDR") -> float:
     return _flip_run(t32, r32, name, magma=False)[1]
 
 
+def flip_per_pixel(test: np.ndarray, ref: np.ndarray, mode: str = "HDR") -> np.ndarray:
+    """FLIP's error of each pixel, float32 (H, W) in [0, 1]: for means over a region (an object, a shadow)."""
+    t32, r32, name = _flip_inputs(test, ref, mode)
+    return np.asarray(_flip_run(t32, r32, name, magma=False)[0], np.float32).reshape(t32.shape[:2])
+
+
 def flip_error_map(test: np.ndarray, ref: np.ndarray, mode: str = "HDR") -> np.ndarray:
     """FLIP per-pixel error in FLIP's magma colour map, as uint8 (H, W, 3) ready for a gallery."""
     t32, r32, name = _flip_inputs(test, ref, mode)

@@ -114,6 +114,8 @@ def test_the_gpu_samples_the_uploaded_array_as_the_numpy_lookup(ctx, rng):
     ``lookup`` over random directions and levels — GL's own mipmaps equal ``mips``."""
     import moderngl
 
+    from reflets.gpu import release_objects
+
     n, count = 8, 64 * 64
     faces = rng.random((6, n, n, 3)).astype(np.float32)  # noise: any misplaced texel shows
     dirs = rng.normal(size=(count, 3))
@@ -150,8 +152,7 @@ def test_the_gpu_samples_the_uploaded_array_as_the_numpy_lookup(ctx, rng):
         gpu = np.frombuffer(target.read(components=4, dtype="f4"), np.float32).reshape(count, 4)[:, :3]
     finally:
         ctx.disable_direct(seamless)
-        for thing in (vao, target, program, query, cube):
-            thing.release()
+        release_objects(ctx, [vao, target, program, query, cube])  # the default framebuffer bound first
     np.testing.assert_allclose(gpu, lookup(faces, dirs, levels), atol=2e-3)  # llvmpipe: 5e-7
 
 

@@ -1,0 +1,106 @@
+"""`reflets ar composite` and `reflets ar run` on files: generated views of the synthetic world (Mitsuba 3; no
+real photographs offline), the user's files never overwritten, bad input one line and exit 2."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("cv2")
+pytest.importorskip("mitsuba")
+
+from PIL import Image  # noqa: E402
+
+from reflets.ar import capture  # noqa: E402
+from reflets.ar.board import Board  # noqa: E402
+from reflets.ar.camera import Intrinsics, camera_fields  # noqa: E402
+from reflets.ar.synthetic import look_at_pose  # noqa: E402
+from reflets.ar.world import SKY, World  # noqa: E402
+from reflets.cli import main  # noqa: E402
+
+SCENE = """
+[camera]
+position = [0, 1, 1]
+look_at = [0, 0, 0]
+
+[materials.clay]
+type = "lambert"
+albedo = [0.7, 0.5, 0.35]
+
+[[mesh]]
+shape = "sphere"
+radius = 0.05
+transform = { translate = [0, 0.05, 0] }
+material = "clay"
+"""
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("ar")
+    board = Board.grid()
+    board.save(folder / "board.json")
+    intrinsics = Intrinsics.from_fov((320, 240), 55)
+    intrinsics.save(folder / "camera.json")
+    (folder / "objects.toml").write_text(SCENE)
+    world = World(board, SKY)
+    names = []
+    for k, eye in enumerate([(0.2, 0.3, 0.4), (-0.25, 0.35, 0.3), (0.0, 0.45, 0.3)]):
+        R, t = look_at_pose(eye, (0, 0.02, 0))
+        linear = world.render(camera_fields(intrinsics, R, t), spp=16, seed=k)
+        codes = np.round(capture.encode_response(np.clip(linear, 0, 1)) * 255).astype(np.uint8)
+        Image.fromarray(codes).save(folder / f"frame{k}.png")
+        names.append(str(folder / f"frame{k}.png"))
+    return folder, names
+
+
+def _common(folder):
+    return ["--intrinsics", str(folder / "camera.json"), "--board", str(folder / "board.json")]
+
+
+@pytest.mark.slow
+def test_composite_writes_the_photo_with_the_object(files, capsys):
+    folder, frames = files
+    out = folder / "out.png"
+    rc = main(["ar", "composite", str(folder / "objects.toml"), "--background", frames[0], "--capture", *frames[1:],
+               *_common(folder), "-o", str(out)])  # fmt: skip
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "captured 2 of 2 frames" in text and "median ms per stage" in text
+    composite, photo = np.asarray(Image.open(out)), np.asarray(Image.open(frames[0]))
+    changed = np.any(composite != photo, axis=2)
+    assert 0.01 < changed.mean() < 0.5
+    rows, cols = np.nonzero(changed)
+    assert abs(cols.mean() - 160) < 50 and abs(rows.mean() - 120) < 50  # around the board's centre
+
+
+@pytest.mark.slow
+def test_run_writes_every_frame_and_never_overwrites(files, capsys):
+    folder, frames = files
+    out = folder / "frames_out"
+    assert main(["ar", "run", str(folder / "objects.toml"), *frames, *_common(folder), "-o", str(out)]) == 0
+    assert len(list(out.glob("frame_*.png"))) == 3
+    assert "3 frames, a pose in 3" in capsys.readouterr().out
+    before = sorted(p.stat().st_mtime_ns for p in out.iterdir())
+    assert main(["ar", "run", str(folder / "objects.toml"), *frames, *_common(folder), "-o", str(out)]) == 2
+    assert sorted(p.stat().st_mtime_ns for p in out.iterdir()) == before
+    assert "exists already" in capsys.readouterr().err
+
+
+def test_bad_inputs_are_one_line(files, capsys, tmp_path):
+    folder, frames = files
+    small = tmp_path / "small.png"
+    Image.fromarray(np.zeros((10, 12, 3), np.uint8)).save(small)
+    cases = [
+        ["ar", "composite", str(folder / "objects.toml"), "--background", str(small), *_common(folder),
+         "-o", str(tmp_path / "o.png")],
+        ["ar", "composite", str(folder / "objects.toml"), "--background", frames[0], *_common(folder),
+         "--mode", "document", "-o", str(tmp_path / "o.txt")],
+        ["ar", "run", str(folder / "objects.toml"), *_common(folder), "-o", str(tmp_path / "v.mp4")],
+        ["ar", "composite", str(folder / "objects.toml"), "--background", frames[0], *_common(folder),
+         "--radius", "-1", "-o", str(tmp_path / "o.png")],
+    ]  # fmt: skip
+    for argv in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "Traceback" not in err, err

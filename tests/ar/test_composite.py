@@ -1,0 +1,84 @@
+"""Compositing a virtual object into a photograph of the synthetic world (Mitsuba 3 path tracing the floor with
+the printed board under the sky map): the object lands where its projection from the pose is, its shadow falls
+under it, pixels neither reaches keep the photograph's codes, and against the ground truth (the same world
+rendered with the object really in it) the differential mode beats the document's on the shadow."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("cv2")
+pytest.importorskip("mitsuba")
+
+import reflets  # noqa: E402
+from reflets.ar import capture  # noqa: E402
+from reflets.ar.board import Board  # noqa: E402
+from reflets.ar.camera import Intrinsics, camera_fields  # noqa: E402
+from reflets.ar.composite import Compositor  # noqa: E402
+from reflets.ar.synthetic import look_at_pose  # noqa: E402
+from reflets.ar.world import SKY, World  # noqa: E402
+from reflets.imageio import read_image  # noqa: E402
+from reflets.scene import load_dict  # noqa: E402
+from reflets.scene.camera import project  # noqa: E402
+from reflets.scene.model import Camera  # noqa: E402
+
+RADIUS, CENTRE = 0.05, (0.0, 0.05, 0.0)
+
+
+@pytest.fixture(scope="module")
+def setting():
+    objects = load_dict({
+        "camera": {"position": [0, 1, 1], "look_at": [0, 0, 0]},
+        "materials": {"clay": {"type": "lambert", "albedo": [0.7, 0.5, 0.35]}},
+        "mesh": [{"shape": "sphere", "radius": RADIUS, "transform": {"translate": list(CENTRE)}, "material": "clay"}],
+    })  # fmt: skip
+    world = World(Board.grid(), SKY)
+    intrinsics = Intrinsics.from_fov((160, 120), 50, principal=(83.0, 57.5))
+    R, t = look_at_pose((0.2, 0.3, 0.4), (0, 0.02, 0))
+    camera = camera_fields(intrinsics, R, t)
+    photo_linear = world.render(camera, spp=32)
+    truth = world.render(camera, objects, spp=32)
+    encode = lambda x: np.round(capture.encode_response(np.clip(x, 0, 1)) * 255).astype(np.uint8)  # noqa: E731
+    cube = capture.CubeMap.from_equirect(read_image(SKY), 32)  # the true sky: this tests the compositing alone
+    return objects, intrinsics, R, t, camera, encode(photo_linear), truth, cube
+
+
+@pytest.fixture(scope="module")
+def composites(setting):
+    objects, intrinsics, R, t, _, photo, _, cube = setting
+    return {mode: Compositor(objects, mode, samples=4000, directions=200)(photo, intrinsics, R, t, cube)
+            for mode in ("differential", "document")}  # fmt: skip
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mode", ["differential", "document"])
+def test_object_in_place_and_untouched_pixels(setting, composites, mode):
+    _, intrinsics, _, _, camera, photo, _, _ = setting
+    out = composites[mode]
+    centre = project(Camera(**camera), np.array([CENTRE]))[0]  # continuous pixel coordinates
+    assert out.coverage[int(centre[1]), int(centre[0])] == 1.0
+    # the sphere's silhouette: its covered area within 5 % of the projected disc's (the sphere subtends a cone)
+    distance = np.linalg.norm(np.array(camera["position"]) - CENTRE)
+    f = intrinsics.K[1, 1]
+    disc = np.pi * (f * np.tan(np.arcsin(RADIUS / distance))) ** 2
+    assert abs(out.coverage.sum() / disc - 1) < 0.05
+    # untouched: the photograph's own codes, and most of the frame
+    assert np.array_equal(out.image[~out.changed], photo[~out.changed])
+    assert out.changed.mean() < 0.5
+    # the shadow: the ground just beside the sphere's foot, toward the camera's lower side, is darker
+    below = (int(centre[1] + 0.9 * np.sqrt(disc / np.pi)) + 2, int(centre[0]))
+    assert out.image[below].mean() < photo[below].mean()
+
+
+@pytest.mark.slow
+def test_differential_beats_document_on_the_shadow(setting, composites):
+    *_, photo, truth, _ = setting
+    photo_linear = capture.decode_response(photo / 255.0)
+    either = composites["differential"].coverage + composites["document"].coverage
+    truth_coded = capture.decode_response(np.round(capture.encode_response(np.clip(truth, 0, 1)) * 255) / 255)
+    shadow = (np.abs(truth_coded - photo_linear).max(axis=2) > 0.01) & (either == 0)
+    assert shadow.sum() > 20
+    error = {mode: reflets.compare(out.linear[shadow][None], truth_coded[shadow][None])["relmse"]
+             for mode, out in composites.items()}  # fmt: skip
+    assert error["differential"] < error["document"]
