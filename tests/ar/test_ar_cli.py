@@ -104,3 +104,18 @@ def test_bad_inputs_are_one_line(files, capsys, tmp_path):
         assert main(argv) == 2, argv
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+
+
+def test_a_short_video_round_trips(tmp_path):
+    """ar run's video path: frames written by FrameSink come back through FrameSource (OpenCV's codecs)."""
+    from reflets.ar.video import FrameSink, FrameSource
+
+    frames = [np.full((48, 64, 3), 40 * k, np.uint8) for k in range(1, 4)]
+    sink = FrameSink.open(str(tmp_path / "clip.avi"))
+    for frame in frames:
+        sink.write(frame)
+    sink.close()
+    back = list(FrameSource.open([str(tmp_path / "clip.avi")], None).frames())
+    assert len(back) == 3
+    for a, b in zip(back, frames, strict=True):
+        assert a.shape == b.shape and np.abs(a.astype(int) - b).mean() < 3  # MJPG is lossy

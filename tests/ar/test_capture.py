@@ -11,7 +11,7 @@ import pytest
 pytest.importorskip("cv2", reason="the 'ar' extra (make test installs it)")
 
 from reflets.ar.camera import Intrinsics  # noqa: E402
-from reflets.ar.capture import (  # noqa: E402
+from reflets.ar.capture import (
     CLIPPED_WEIGHT,
     GREY,
     CubeMap,
@@ -19,6 +19,7 @@ from reflets.ar.capture import (  # noqa: E402
     environment_view,
     face_coordinates,
     face_means,
+    filled,  # noqa: E402
     lookup,
     mips,
     project,
@@ -306,3 +307,22 @@ def test_specular_level_for_the_document_s_materials():
     # the mean texel solid angle at that level equals the normalised lobe's 2π / (Ns + 1)
     level = specular_level(400, 512)
     assert 4 * np.pi / (6 * 512**2) * 4**level == pytest.approx(2 * np.pi / 401)
+
+
+def test_unseen_texels_are_filled_by_elevation():
+    """A capture that saw only the horizon band: the zenith takes the highest band's mean, the seen texels
+    stay as captured, and nothing seen leaves the map alone."""
+    n = 16
+    dirs = CubeMap.directions(n)
+    elevation = np.degrees(np.arcsin(dirs[..., 1]))
+    faces = np.stack([0.2 + 0.01 * np.clip(elevation, 0, None)] * 3, axis=-1)  # brighter upward
+    band = (elevation > -20) & (elevation < 40)
+    cube = CubeMap(faces, band.astype(np.float32))
+    out = filled(cube)
+    assert np.array_equal(out.faces[band], cube.faces[band])
+    top = elevation >= 40
+    highest = (elevation >= 30) & (elevation < 40)
+    np.testing.assert_allclose(out.faces[top], faces[highest].mean(axis=0)[None].repeat(top.sum(), 0), rtol=1e-5)
+    assert not np.any(out.faces[~band] == cube.fallback)
+    empty = CubeMap.empty(n)
+    assert filled(empty) is empty

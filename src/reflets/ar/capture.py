@@ -362,6 +362,28 @@ def _border_falloff(width: int, height: int, border: float) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------- mips, lookups
 
 
+def filled(cube: CubeMap, band_degrees: float = 10.0) -> CubeMap:
+    """The map with its never-seen texels (weight 0) filled by elevation: each takes the weighted mean of the
+    seen texels in its band of elevation, or of the nearest band seen — a sky varies mostly with elevation, and
+    a handheld capture misses the zenith and the nadir (the document leaves them grey, 0.5, which lights the
+    object and shades the ground as if the zenith were a mid-grey sky). Nothing seen: the map as it is."""
+    seen = cube.weights > 0
+    if not np.any(seen) or np.all(seen):
+        return cube
+    elevation = np.degrees(np.arcsin(np.clip(CubeMap.directions(cube.size)[..., 1], -1.0, 1.0)))
+    bands = np.minimum(((elevation + 90.0) // band_degrees).astype(int), int(180 // band_degrees) - 1)
+    count = int(bands.max()) + 1
+    weight = np.bincount(bands[seen], cube.weights[seen], minlength=count)
+    means = np.stack([np.bincount(bands[seen], cube.weights[seen] * cube.faces[seen][:, c], minlength=count)
+                      for c in range(3)], axis=1)  # fmt: skip
+    has = np.flatnonzero(weight > 0)
+    nearest = has[np.argmin(np.abs(np.arange(count)[:, None] - has[None, :]), axis=1)]
+    band_mean = means[nearest] / weight[nearest, None]
+    out = CubeMap(cube.faces, cube.weights, cube.fallback, cube.gain, cube.frames)
+    out.faces[~seen] = band_mean[bands[~seen]]
+    return out
+
+
 def _faces_of(cube) -> np.ndarray:
     return cube.faces if isinstance(cube, CubeMap) else np.asarray(cube, np.float32)
 

@@ -6,8 +6,9 @@
 - specular: k_s times the cube map along the reflected direction at McGuire et al.'s mip level of the exponent
   (``capture.specular_level``), on the GPU (``shaders/document.frag``);
 - the shadow on the ground: the sphere decomposition's occlusion weighted by the light behind each sphere,
-  a_i = cos ω sin²α · ℓ_i / A (ℓ_i the cube map toward the sphere at the mip level of its solid angle, A the
-  ambient radiance E(+y)/π; [erratum] π restored in the text's formula, which the code already had), spheres
+  a_i = cos ω sin²α · min(‖ℓ_i‖ / ‖A‖, π) (the document's code: ℓ_i the cube map toward the sphere at the mip
+  level of its solid angle, A the ambient radiance E(+y)/π, RGB lengths, so the shadow is grey; [erratum] the
+  text's formula drops the π of the cap's cosine-weighted solid angle, the code has it right), spheres
   combined as Π (1 − a_i), tabulated over 3 × the object's footprint as the document's shadow texture.
 
 The document shades Lambert and Phong-like materials only (k_d, k_s, N_s): reflets' ``lambert`` and normalised
@@ -145,7 +146,7 @@ def ambient(cube) -> np.ndarray:
 
 
 def shadow_texture(centres: np.ndarray, radii: np.ndarray, cube, texels: int = SHADOW_TEXELS):
-    """The ground's remaining light fraction Π_i (1 − a_i), RGB, on a texels² grid over SHADOW_EXTENT × the
+    """The ground's remaining light fraction Π_i (1 − a_i) (grey, as RGB), on a texels² grid over SHADOW_EXTENT × the
     spheres' footprint: (grid (T, T, 3), origin (x, z) of texel centre 0, spacing)."""
     lo = (centres - radii[:, None]).min(axis=0)[[0, 2]]
     hi = (centres + radii[:, None]).max(axis=0)[[0, 2]]
@@ -157,18 +158,17 @@ def shadow_texture(centres: np.ndarray, radii: np.ndarray, cube, texels: int = S
     points = np.stack(np.broadcast_arrays(x[None, :], 0.0, z[:, None]), axis=-1).reshape(-1, 3)
     chain = capture.mips(cube)
     n = chain[0].shape[1]
-    a_ambient = np.maximum(ambient(cube), 1e-12)
-    remaining = np.ones((len(points), 3))
-    for centre, radius in zip(centres, radii, strict=True):
-        d = centre - points
-        distance = np.linalg.norm(d, axis=1)
-        direction = d / distance[:, None]
-        sin2 = np.clip(radius / distance, 0.0, 1.0) ** 2
-        cos_w = np.clip(direction[:, 1], 0.0, 1.0)
-        level = np.log2(np.maximum(n * radius / distance, 1e-6))
-        local = capture.lookup(cube, direction, level, chain=chain)
-        remaining *= 1.0 - np.clip((sin2 * cos_w)[:, None] * local / a_ambient, 0.0, 1.0)
-    return remaining.reshape(texels, texels, 3), origin, spacing
+    a_ambient = max(float(np.linalg.norm(ambient(cube))), 1e-12)
+    d = centres[None, :, :] - points[:, None, :]  # (texels², spheres, 3): all lookups in one call
+    distance = np.linalg.norm(d, axis=2)
+    direction = d / distance[..., None]
+    sin2 = np.clip(radii[None, :] / distance, 0.0, 1.0) ** 2
+    cos_w = np.clip(direction[..., 1], 0.0, 1.0)
+    level = np.log2(np.maximum(n * radii[None, :] / distance, 1e-6))
+    local = np.linalg.norm(capture.lookup(cube, direction, level, chain=chain), axis=2)
+    occluded = np.clip(sin2 * cos_w * np.minimum(local / a_ambient, np.pi), 0.0, 1.0)
+    remaining = np.prod(1.0 - occluded, axis=1)
+    return np.repeat(remaining.reshape(texels, texels, 1), 3, axis=2), origin, spacing
 
 
 def sample_shadow(grid: np.ndarray, origin: np.ndarray, spacing: float, points: np.ndarray) -> np.ndarray:

@@ -43,6 +43,7 @@ class Session:
                  response="srgb", **compositor):  # fmt: skip
         self.board, self.intrinsics, self.radius, self.response = board, intrinsics, radius, response
         self.cube = cube if cube is not None else capture.CubeMap.empty(CUBE_SIZE)
+        self.lighting = capture.filled(self.cube)  # what the compositor reads: the unseen texels filled
         self.capture_frames = capture_frames and cube is None
         self.compositor = Compositor(objects, mode, response=response, **compositor)
         self._last: Pose | None = None
@@ -66,8 +67,10 @@ class Session:
 
     def add_capture(self, frame: np.ndarray, pose: Pose) -> float:
         """Reproject a frame seen with ``pose`` into the map; its gain relative to the map."""
-        return capture.capture(self.cube, frame, self.intrinsics, pose.R, pose.t, radius=self.radius,
+        gain = capture.capture(self.cube, frame, self.intrinsics, pose.R, pose.t, radius=self.radius,
                                response=self.response)  # fmt: skip
+        self.lighting = capture.filled(self.cube)
+        return gain
 
     def process(self, frame: np.ndarray, composite: bool = True, pose: Pose | None = None) -> FrameResult:
         """Track (unless ``pose`` is given), capture, composite."""
@@ -81,7 +84,7 @@ class Session:
             timings["capture_ms"] = 1e3 * (time.perf_counter() - t1)
         result = None
         if pose is not None and composite:
-            result = self.compositor(frame, self.intrinsics, pose.R, pose.t, self.cube, exposure=gain or 1.0)
+            result = self.compositor(frame, self.intrinsics, pose.R, pose.t, self.lighting, exposure=gain or 1.0)
             timings.update(result.timings)
         timings["frame_ms"] = 1e3 * (time.perf_counter() - t0)
         return FrameResult(pose, result, gain, timings)

@@ -29,6 +29,7 @@ SUITES: dict[str, str] = {
     "editing": "reflets.bench.editing:bench_editing",
     "gltf": "reflets.bench.gltf:bench_gltf",
     "ar": "reflets.bench.ar:bench_ar",
+    "ar-loop": "reflets.bench.ar:bench_ar_loop",
 }
 
 
