@@ -250,6 +250,8 @@ def cmd_ar_composite(args) -> int:
     from .imageio import check_output_path, write_png8
 
     out = check_output_path(args.output, (".png",))
+    if args.capture and args.environment:
+        raise ArgumentError("give --capture frames or an --environment light probe, not both", field="--environment")
     (background,) = _read_grey_images([args.background], "RGB")
     captures = _read_grey_images(args.capture or [], "RGB")
     session = _ar_session(args, args.scene)

@@ -99,6 +99,8 @@ def test_bad_inputs_are_one_line(files, capsys, tmp_path):
         ["ar", "run", str(folder / "objects.toml"), *_common(folder), "-o", str(tmp_path / "v.mp4")],
         ["ar", "composite", str(folder / "objects.toml"), "--background", frames[0], *_common(folder),
          "--radius", "-1", "-o", str(tmp_path / "o.png")],
+        ["ar", "composite", str(folder / "objects.toml"), "--background", frames[0], "--capture", frames[1],
+         "--environment", str(SKY), *_common(folder), "-o", str(tmp_path / "o.png")],
     ]  # fmt: skip
     for argv in cases:
         assert main(argv) == 2, argv

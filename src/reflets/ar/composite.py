@@ -34,6 +34,17 @@ from ..scene.model import Camera
 from ..scene.transform import look_at
 from . import capture
 from .camera import Intrinsics, camera_fields
+from .document import (
+    ObjectGeometry,
+    face_weights,
+    phong_terms,
+    render_object,
+    sample_shadow,
+    shadow_texture,
+    vertex_diffuse,
+)
+from .occlusion import self_occlusion
+from .spheres import decompose, surface_samples
 
 MODES = ("differential", "document")
 #: the differential mode's local ground spans this many times the object's footprint
@@ -87,8 +98,6 @@ class Compositor:
             raise ArgumentError(f"unknown mode {mode!r}; allowed: {', '.join(MODES)}", field="mode")
         if not isinstance(supersample, int) or not 1 <= supersample <= 4:
             raise ArgumentError(f"supersample must be 1 to 4, got {supersample!r}", field="supersample")
-        from .document import ObjectGeometry, face_weights, phong_terms
-
         self.objects, self.mode, self.supersample = objects, mode, supersample
         self.method, self.weights, self.response = method, weights, response
         self.timings: dict[str, float] = {}  # the precomputation's, milliseconds
@@ -98,9 +107,6 @@ class Compositor:
         lo, hi = self.geometry.positions.min(axis=0), self.geometry.positions.max(axis=0)
         self.footprint = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[2] + hi[2]), float(max(hi[0] - lo[0], hi[2] - lo[2])))
         if mode == "document":
-            from .occlusion import self_occlusion
-            from .spheres import decompose, surface_samples
-
             for name in self.geometry.material:
                 phong_terms(objects, name)  # an unsupported material fails before the precomputation
             g = self.geometry
@@ -112,7 +118,7 @@ class Compositor:
             t1 = time.perf_counter()
             self.centres, self.radii = decompose(surface_samples(g.positions, g.faces, samples, seed), spheres, seed)
             self.timings["spheres_ms"] = 1e3 * (time.perf_counter() - t1)
-        self._shadow = None  # (cube id, texture): the document rebuilds it when the map changes
+        self._shadow = None  # (the map, its shadow texture): rebuilt when another map comes, as the document
 
     def __call__(self, photo: np.ndarray, intrinsics: Intrinsics, R: np.ndarray, t: np.ndarray, cube,
                  exposure: float = 1.0) -> Composite:  # fmt: skip
@@ -133,10 +139,10 @@ class Compositor:
         origin, dirs = pixel_rays(Camera(**camera))
         flat = dirs.reshape(-1, 3)
         hits = self.rays.intersect(np.broadcast_to(origin, flat.shape), flat)
-        on_object = (hits.kind == MESHES) & np.isfinite(hits.t)
         with np.errstate(divide="ignore", invalid="ignore"):
             t_ground = np.where(flat[:, 1] < 0, -origin[1] / flat[:, 1], np.inf)
-        on_ground = np.isfinite(t_ground) & ~(on_object & (hits.t < t_ground))
+        on_object = (hits.kind == MESHES) & np.isfinite(hits.t) & (hits.t <= t_ground)  # the real ground hides
+        on_ground = np.isfinite(t_ground) & ~on_object
         ground_points = origin + t_ground[on_ground, None] * flat[on_ground]
         timings["rays_ms"] = 1e3 * (time.perf_counter() - t0)
 
@@ -188,8 +194,6 @@ class Compositor:
         return renders["object"]
 
     def _document(self, camera, cube, ratio, on_ground, ground_points, timings) -> np.ndarray:
-        from .document import render_object, sample_shadow, shadow_texture, vertex_diffuse
-
         t0 = time.perf_counter()
         if self._shadow is None or self._shadow[0] is not cube:
             self._shadow = (cube, shadow_texture(self.centres, self.radii, cube))

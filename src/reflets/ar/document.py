@@ -159,15 +159,16 @@ def shadow_texture(centres: np.ndarray, radii: np.ndarray, cube, texels: int = S
     chain = capture.mips(cube)
     n = chain[0].shape[1]
     a_ambient = max(float(np.linalg.norm(ambient(cube))), 1e-12)
-    d = centres[None, :, :] - points[:, None, :]  # (texels², spheres, 3): all lookups in one call
-    distance = np.linalg.norm(d, axis=2)
-    direction = d / distance[..., None]
-    sin2 = np.clip(radii[None, :] / distance, 0.0, 1.0) ** 2
-    cos_w = np.clip(direction[..., 1], 0.0, 1.0)
-    level = np.log2(np.maximum(n * radii[None, :] / distance, 1e-6))
-    local = np.linalg.norm(capture.lookup(cube, direction, level, chain=chain), axis=2)
-    occluded = np.clip(sin2 * cos_w * np.minimum(local / a_ambient, np.pi), 0.0, 1.0)
-    remaining = np.prod(1.0 - occluded, axis=1)
+    remaining = np.ones(len(points))
+    for centre, radius in zip(centres, radii, strict=True):  # per sphere: small arrays, faster than all at once
+        d = centre - points
+        distance = np.linalg.norm(d, axis=1)
+        direction = d / distance[:, None]
+        sin2 = np.clip(radius / distance, 0.0, 1.0) ** 2
+        cos_w = np.clip(direction[:, 1], 0.0, 1.0)
+        level = np.log2(np.maximum(n * radius / distance, 1e-6))
+        local = np.linalg.norm(capture.lookup(cube, direction, level, chain=chain), axis=1)
+        remaining *= 1.0 - np.clip(sin2 * cos_w * np.minimum(local / a_ambient, np.pi), 0.0, 1.0)
     return np.repeat(remaining.reshape(texels, texels, 1), 3, axis=2), origin, spacing
 
 

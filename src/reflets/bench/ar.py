@@ -83,8 +83,7 @@ def _captures(world: World, board: Board, quick: bool, out_dir: Path):
     single = rig_capture(world, board, back, front, face)
     bracketed = rig_capture(world, board, back, front, face, bracket=True)
     write_png8(out_dir / "ar_capture_frame.png", single.front_frame)
-    for name, rig in (("single", single), ("bracketed", bracketed)):
-        write_png8(out_dir / f"ar_captured_environment_{name}.png", encode(capture.to_equirect(rig.cube, 256)))
+    write_png8(out_dir / "ar_captured_environment.png", encode(capture.to_equirect(bracketed.cube, 256)))
     info = {"frames": len(single.back_frames), "captured": single.captured, "face": face,
             "device_pose_mm_max": single.pose_mm_max}  # fmt: skip
     return {"captured": single.cube, "captured, bracketed": bracketed.cube}, info, single.back_frames
@@ -126,7 +125,8 @@ def _composites(world: World, board: Board, cubes: dict, quick: bool, out_dir: P
                 row[f"{region}_relmse"] = relmse(out.linear[mask][None], truth_linear[mask][None])
                 row[f"{region}_flip"] = float(flip[mask].mean())
             rows.append(row)
-            images[f"{label} ({lighting})"] = out.image
+            if lighting == "captured, bracketed" and weights == "exact":  # the images kept beside the results
+                images[f"{label} ({lighting})"] = out.image
     for name, image in images.items():
         stem = "".join(c if c.isalnum() else "_" for c in name).strip("_")
         write_png8(out_dir / f"ar_{stem}.png", image)
