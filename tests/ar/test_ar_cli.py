@@ -121,3 +121,19 @@ def test_a_short_video_round_trips(tmp_path):
     assert len(back) == 3
     for a, b in zip(back, frames, strict=True):
         assert a.shape == b.shape and np.abs(a.astype(int) - b).mean() < 3  # MJPG is lossy
+
+
+@pytest.mark.slow
+def test_run_on_a_synthetic_video(files, capsys):
+    """The live loop on a short generated video (the three views, MJPG): a pose in every frame."""
+    from reflets.ar.video import FrameSink
+
+    folder, frames = files
+    sink = FrameSink.open(str(folder / "clip.avi"))
+    for name in frames:
+        sink.write(np.asarray(Image.open(name).convert("RGB")))
+    sink.close()
+    out = folder / "clip_out.avi"
+    assert main(["ar", "run", str(folder / "objects.toml"), str(folder / "clip.avi"), *_common(folder),
+                 "-o", str(out)]) == 0  # fmt: skip
+    assert "3 frames, a pose in 3" in capsys.readouterr().out and out.stat().st_size > 0
