@@ -164,29 +164,26 @@ def _to_linear(frame: np.ndarray, response) -> tuple[np.ndarray, np.ndarray]:
     return table[frame], well_exposed
 
 
+def _apply_response(values, response, srgb_curve, exponent) -> np.ndarray:
+    values = np.asarray(values, np.float64)
+    if isinstance(response, str):
+        if response == "srgb":
+            return srgb_curve(values)
+        if response == "linear":
+            return values
+        raise ValueError(f"unknown camera response {response!r}: 'srgb', 'linear' or a gamma number")
+    return np.maximum(values, 0.0) ** exponent(float(response))
+
+
 def decode_response(encoded, response="srgb") -> np.ndarray:
     """Camera codes in [0, 1] → linear: ``"srgb"`` (exact piecewise curve), ``"linear"``, or a gamma number γ
     (linear = code^γ)."""
-    encoded = np.asarray(encoded, np.float64)
-    if isinstance(response, str):
-        if response == "srgb":
-            return srgb_to_linear(encoded)
-        if response == "linear":
-            return encoded
-        raise ValueError(f"unknown camera response {response!r}: 'srgb', 'linear' or a gamma number")
-    return np.maximum(encoded, 0.0) ** float(response)
+    return _apply_response(encoded, response, srgb_to_linear, lambda gamma: gamma)
 
 
 def encode_response(linear, response="srgb") -> np.ndarray:
     """Inverse of :func:`decode_response` (not clamped)."""
-    linear = np.asarray(linear, np.float64)
-    if isinstance(response, str):
-        if response == "srgb":
-            return linear_to_srgb(linear)
-        if response == "linear":
-            return linear
-        raise ValueError(f"unknown camera response {response!r}: 'srgb', 'linear' or a gamma number")
-    return np.maximum(linear, 0.0) ** (1.0 / float(response))
+    return _apply_response(linear, response, linear_to_srgb, lambda gamma: 1.0 / gamma)
 
 
 def _smoothstep(edge0: float, edge1: float, x) -> np.ndarray:
