@@ -15,7 +15,7 @@ from . import capture
 from .board import Board
 from .camera import Intrinsics
 from .composite import Composite, Compositor
-from .tracking import KEEP_FRAMES, Pose, detect, solve_pose
+from .tracking import Pose, Tracker
 
 #: the cube map's face size when nothing else is asked (the document's is 512; the diffuse and the specular of
 #: glossy lobes read coarse mips, and the prefiltered IBL downsamples anyway)
@@ -46,24 +46,10 @@ class Session:
         self.lighting = capture.filled(self.cube)  # what the compositor reads: the unseen texels filled
         self.capture_frames = capture_frames and cube is None
         self.compositor = Compositor(objects, mode, response=response, **compositor)
-        self._last: Pose | None = None
-        self._lost = 0
+        self.tracker = Tracker(board, intrinsics)
 
     def track(self, frame: np.ndarray, timings: dict[str, float] | None = None) -> Pose | None:
-        t0 = time.perf_counter()
-        markers = detect(grey(frame), self.board)
-        t1 = time.perf_counter()
-        pose = solve_pose(*markers, self.intrinsics)
-        if timings is not None:
-            timings["detect_ms"], timings["pose_ms"] = 1e3 * (t1 - t0), 1e3 * (time.perf_counter() - t1)
-        if pose is not None:
-            self._last, self._lost = pose, 0
-        elif self._last is not None and self._lost < KEEP_FRAMES:
-            self._lost += 1
-            pose = Pose(self._last.R, self._last.t, 0)
-        else:
-            self._last = None
-        return pose
+        return self.tracker.update(grey(frame), timings)
 
     def add_capture(self, frame: np.ndarray, pose: Pose) -> float:
         """Reproject a frame seen with ``pose`` into the map; its gain relative to the map."""

@@ -4,6 +4,7 @@ pose is kept ``KEEP_FRAMES`` frames after the board is lost (as the document's c
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,20 +51,37 @@ def solve_pose(world: np.ndarray, pixels: np.ndarray, intrinsics: Intrinsics) ->
     return Pose(cv2.Rodrigues(rvec)[0], tvec.ravel(), len(world) // 4)
 
 
+class Tracker:
+    """Poses frame after frame: solved from the markers seen, or the last one kept for KEEP_FRAMES frames after
+    the board is lost (then None until it is found again)."""
+
+    def __init__(self, board: Board, intrinsics: Intrinsics):
+        self.board, self.intrinsics = board, intrinsics
+        self._last: Pose | None = None
+        self._lost = 0
+
+    def update(self, image: np.ndarray, timings: dict[str, float] | None = None) -> Pose | None:
+        """The pose of a grey image; ``timings`` receives detect_ms and pose_ms."""
+        t0 = time.perf_counter()
+        markers = detect(image, self.board)
+        t1 = time.perf_counter()
+        pose = solve_pose(*markers, self.intrinsics)
+        if timings is not None:
+            timings["detect_ms"], timings["pose_ms"] = 1e3 * (t1 - t0), 1e3 * (time.perf_counter() - t1)
+        if pose is not None:
+            self._last, self._lost = pose, 0
+        elif self._last is not None and self._lost < KEEP_FRAMES:
+            self._lost += 1
+            pose = Pose(self._last.R, self._last.t, 0)
+        else:
+            self._last = None
+        return pose
+
+
 def track(images, board: Board, intrinsics: Intrinsics) -> list[Pose | None]:
     """A pose per image (None before the board is first seen, or after it is lost for over KEEP_FRAMES)."""
-    poses, last, lost = [], None, 0
-    for image in images:
-        pose = solve_pose(*detect(image, board), intrinsics)
-        if pose is not None:
-            last, lost = pose, 0
-        elif last is not None and lost < KEEP_FRAMES:
-            lost += 1
-            pose = Pose(last.R, last.t, 0)
-        else:
-            last = None
-        poses.append(pose)
-    return poses
+    tracker = Tracker(board, intrinsics)
+    return [tracker.update(image) for image in images]
 
 
 def pose_error(R: np.ndarray, t: np.ndarray, R_true: np.ndarray, t_true: np.ndarray) -> tuple[float, float]:

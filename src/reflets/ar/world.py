@@ -7,7 +7,7 @@ same world with the virtual objects really in it is what a composite should look
 from __future__ import annotations
 
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -33,7 +33,6 @@ class World:
     environment_scale: float = 1.0
     floor_albedo: float = 0.3
     floor_size: float = 20.0
-    _texture_cache: dict = field(default_factory=dict, repr=False)
 
     def scene(self, camera: dict, objects: Scene | None = None) -> Scene:
         """The world (floor, environment) with ``objects``' meshes and materials, as a reflets scene seen by
