@@ -299,7 +299,7 @@ def _ar_card(entry: dict | str) -> str:
         for label, name in entry["images"].items()
     )
     errors = "; ".join(
-        f"{mode}: relMSE {e['object_relmse']:.2e} over the objects, {e['ground_relmse']:.2e} over the changed ground"
+        f"{mode}: relMSE {e['object_relmse']:.2e} over the objects, {e['shadow_relmse']:.2e} over their shadow"
         for mode, e in entry["errors"].items()
     )
     return (

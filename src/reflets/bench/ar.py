@@ -33,7 +33,7 @@ from ..ar.board import Board
 from ..ar.camera import Intrinsics, camera_fields
 from ..ar.composite import Compositor
 from ..ar.session import Session, grey
-from ..ar.showcase import OBJECTS, RADIUS, device_poses, encode, rig_capture, view_pose
+from ..ar.showcase import OBJECTS, RADIUS, device_poses, encode, regions, rig_capture, view_pose
 from ..ar.synthetic import look_at_pose, render_view
 from ..ar.tracking import detect, pose_error, solve_pose
 from ..ar.world import SKY, World
@@ -43,10 +43,6 @@ from ..scene import load_dict
 
 MODES = [("document, W_F fit", "document", "fit"), ("document, W_F exact", "document", "exact"),
          ("differential", "differential", "exact")]  # fmt: skip
-#: the shadow region: where the smoothed ground truth is this much darker than the smoothed photograph
-SHADOW_DROP = 0.03
-
-
 def _tracking(quick: bool) -> list[dict]:
     board = Board.grid()
     intrinsics = Intrinsics.from_fov((640, 480), 50, principal=(326.0, 236.0))
@@ -89,17 +85,6 @@ def _captures(world: World, board: Board, quick: bool, out_dir: Path):
     return {"captured": single.cube, "captured, bracketed": bracketed.cube}, info, single.back_frames
 
 
-def _regions(truth: np.ndarray, photo: np.ndarray, coverage: np.ndarray) -> dict[str, np.ndarray]:
-    """The object (fully covered pixels) and the shadow (off the object and a 2-pixel band around it, where
-    the ground truth, smoothed over the path tracer's noise, is SHADOW_DROP darker than the photograph)."""
-    from scipy.ndimage import binary_dilation, gaussian_filter
-
-    sigma = 2.0 * truth.shape[1] / 640
-    ratio = gaussian_filter(truth.mean(axis=2), sigma) / np.maximum(gaussian_filter(photo.mean(axis=2), sigma), 1e-6)
-    near_object = binary_dilation(coverage > 0, iterations=2)
-    return {"object": coverage == 1.0, "shadow": (ratio < 1.0 - SHADOW_DROP) & ~near_object}
-
-
 def _composites(world: World, board: Board, cubes: dict, quick: bool, out_dir: Path) -> tuple[list[dict], dict]:
     objects = load_dict(OBJECTS)
     intrinsics = Intrinsics.from_fov((160, 120) if quick else (640, 480), 50)
@@ -118,7 +103,7 @@ def _composites(world: World, board: Board, cubes: dict, quick: bool, out_dir: P
                                 directions=200 if quick else 1000)  # fmt: skip
         for lighting, environment in lightings.items():
             out = compositor(photo, intrinsics, pose.R, pose.t, environment)
-            masks = masks or _regions(truth_linear, photo_linear, out.coverage)
+            masks = masks or regions(truth_linear, photo_linear, out.coverage)
             flip = flip_per_pixel(capture.decode_response(out.image / 255.0), truth_linear, "LDR")
             row = {"mode": label, "lighting": lighting}
             for region, mask in masks.items():
