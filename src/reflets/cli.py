@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ArgumentError, RefletsError
+from .errors import ARRAY_READ_ERRORS, ArgumentError, RefletsError
 
 EXIT_USER_ERROR = 2
 
@@ -128,7 +128,7 @@ def cmd_edit_highlights(args) -> int:
             targets, mask = data["ell"], data["mask"]
     except FileNotFoundError:
         raise ArgumentError("file not found", file=args.targets, field="--targets") from None
-    except (OSError, ValueError, KeyError) as exc:
+    except (*ARRAY_READ_ERRORS, KeyError) as exc:
         raise ArgumentError(f"not an .npz with 'ell' and 'mask' ({exc})", file=args.targets) from None
     result = edit_highlights(scene, args.mesh, targets, mask, light=args.light, iterations=args.iterations)
     out = write_highlights(args.output, result)

@@ -8,6 +8,7 @@ ordinary Python exceptions.
 
 from __future__ import annotations
 
+import zipfile
 from pathlib import Path
 
 
@@ -47,3 +48,8 @@ class ShaderError(RefletsError):
 
 class ArgumentError(RefletsError):
     """A command-line or API argument is out of range (image size, method name, sample count)."""
+
+
+#: what reading a damaged or empty .npy / .npz raises (NumPy names none of these as its own): to be caught where a
+#: file enters and turned into one line naming it
+ARRAY_READ_ERRORS = (OSError, ValueError, EOFError, zipfile.BadZipFile)

@@ -24,12 +24,13 @@ from typing import Annotated, ClassVar
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
+from ..quantities import NonNeg
+
 MATERIALS: dict[str, type[Material]] = {}
 #: the light types of a scene file
 LIGHT_TYPES = ("point", "directional", "quad", "polygon", "environment")
 
 Unit = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
-NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 #: an RGB reflectance in [0, 1] per channel
 Reflectance = tuple[Unit, Unit, Unit]
 #: an RGB scale factor ≥ 0 per channel

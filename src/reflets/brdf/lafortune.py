@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar, Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
+from ..quantities import Finite
 from .base import (
     RGB,
     Material,
@@ -23,7 +24,6 @@ from .base import (
 #: the most lobes a material may have (the GLSL twin's uniform arrays have this size)
 MAX_LOBES = 8
 
-Finite = Annotated[float, Field(allow_inf_nan=False)]
 _Z = np.array([0.0, 0.0, 1.0])
 
 

@@ -82,6 +82,7 @@ from typing import Literal
 import numpy as np
 
 from ..errors import SceneError
+from ..quantities import MAX_MAGNITUDE
 from .base import (
     RGB,
     Material,
@@ -279,6 +280,9 @@ def _load_cached(path: str, mtime_ns: int, size: int) -> MerlTable:
     valid = np.isfinite(raw) & (raw >= 0)
     missing = int(raw.size - np.count_nonzero(valid))
     planes = np.where(valid, raw, 0.0).reshape(3, *MERL_SHAPE) * CHANNEL_SCALES[:, None, None, None]
+    if planes.max() > MAX_MAGNITUDE:
+        raise SceneError(f"BRDF values up to {planes.max():.3g}, over {MAX_MAGNITUDE:.0e}: not a MERL table of a real "
+                         "material", file=path)  # fmt: skip
     values = np.ascontiguousarray(np.moveaxis(planes, 0, -1))
     values.flags.writeable = False
     exponent, weight = _fit_lobe(values)

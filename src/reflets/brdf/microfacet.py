@@ -18,6 +18,7 @@ from pydantic import Field, model_validator
 from scipy.special import erfcx
 
 from ..fresnel import GOLD_ETA, GOLD_K, fresnel_conductor, fresnel_dielectric, fresnel_schlick
+from ..quantities import Positive
 from .base import (
     RGB,
     Material,
@@ -184,7 +185,6 @@ class Distribution:
 
 
 Alpha = Annotated[float, Field(ge=1e-3, le=1, allow_inf_nan=False)]
-Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 
 
 @register_material

@@ -8,15 +8,14 @@ do (``fermat``, the reference's mirror bounce) weight the reflected radiance by 
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import model_validator
 
 from ..fresnel import GOLD_ETA, GOLD_K, fresnel_conductor
+from ..quantities import Positive
 from .base import LIGHT_TYPES, RGB, Material, Reflectance, register_material, upper
-
-Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 
 
 @register_material

@@ -6,6 +6,7 @@ import numpy as np
 
 from ..equirect import equirect_direction, equirect_uv, rotation_y, row_solid_angles
 from ..errors import ImageError, SceneError
+from ..quantities import MAX_MAGNITUDE
 from .model import EnvironmentLight, Scene
 
 
@@ -23,6 +24,10 @@ def load_environment(scene: Scene) -> np.ndarray | None:
         raise SceneError(exc.message, file=exc.file, field=f"light[{index}].file") from None
     if not np.all(np.isfinite(image)) or np.any(image < 0):
         raise SceneError("environment image has negative or non-finite pixels", file=scene.resolve(light.file))
+    brightest = float(image.max(initial=0.0)) * light.scale
+    if brightest > MAX_MAGNITUDE:
+        raise SceneError(f"pixels up to {image.max():.3g} × scale {light.scale:.3g} exceed {MAX_MAGNITUDE:.0e}",
+                         file=scene.resolve(light.file), field=f"light[{index}].scale")  # fmt: skip
     return (image * np.float32(light.scale)).astype(np.float32)
 
 

@@ -32,13 +32,33 @@ def load_scene(path: str | Path) -> Scene:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"invalid TOML: {exc}", file=path) from None
+    except RecursionError:  # the parser recurses once per nested array or inline table
+        raise SceneError(f"values nested too deeply (a scene needs at most {MAX_NESTING} levels)", file=path) from None
     return load_dict(data, base_dir=path.resolve().parent, source=path)
+
+
+#: the deepest nesting of tables and arrays a scene may have (the deepest real one: a light's polygon, 4)
+MAX_NESTING = 32
+
+
+def _nesting_too_deep(data) -> bool:
+    """Whether tables and arrays nest deeper than MAX_NESTING (iterative: no recursion to overflow)."""
+    stack = [(data, 1)]
+    while stack:
+        value, depth = stack.pop()
+        if depth > MAX_NESTING:
+            return True
+        children = value.values() if isinstance(value, dict) else value if isinstance(value, list | tuple) else ()
+        stack.extend((child, depth + 1) for child in children if isinstance(child, dict | list | tuple))
+    return False
 
 
 def load_dict(data: dict[str, Any], base_dir: str | Path | None = None, source: str | Path | None = None) -> Scene:
     """Validate a scene given as a dict (the TOML structure), like ``mitsuba.load_dict``."""
     if not isinstance(data, dict):
         raise SceneError(f"a scene must be a table/dict, got {type(data).__name__}", file=source)
+    if _nesting_too_deep(data):
+        raise SceneError(f"values nested too deeply (a scene needs at most {MAX_NESTING} levels)", file=source)
     try:
         scene = Scene.model_validate({**data, "base_dir": Path(base_dir) if base_dir else None})
     except ValidationError as exc:

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from reflets.errors import SceneError
+from reflets.quantities import MAX_MAGNITUDE
 from reflets.scene.meshdata import MeshData
 
 SUPPORTED_EXTENSIONS = (".obj", ".ply", ".gltf", ".glb", ".stl", ".off")
@@ -192,6 +193,9 @@ def load_mesh_file(path: str | Path) -> MeshData:
     faces = np.concatenate([part[3] + o for part, o in zip(parts, offsets, strict=True)])
     if not np.all(np.isfinite(pos)) or faces.min() < 0 or faces.max() >= len(pos):
         raise SceneError("corrupt mesh: non-finite vertex coordinates or face indices out of range", file=path)
+    if np.abs(pos).max() > MAX_MAGNITUDE:
+        raise SceneError(f"vertex coordinates up to {np.abs(pos).max():.3g}, over {MAX_MAGNITUDE:.0e}: scale the mesh "
+                         "in its file (the transform's scale applies after)", file=path)  # fmt: skip
 
     nrm = smooth_normals(pos, faces)
     has_uv = np.concatenate([np.full(len(part[0]), part[2] is not None) for part in parts])

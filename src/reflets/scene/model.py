@@ -13,9 +13,8 @@ from typing import Annotated, Any, Literal, Union
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
 
-Finite = Annotated[float, Field(allow_inf_nan=False)]
-NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
-Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+from ..quantities import Finite, NonNeg, Positive
+
 Vec3 = tuple[Finite, Finite, Finite]
 Color = tuple[NonNeg, NonNeg, NonNeg]
 Count = Annotated[int, Field(ge=1, le=4096)]  # tessellation segments

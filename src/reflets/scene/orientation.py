@@ -10,7 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order
 
-from ..errors import SceneError
+from ..errors import ARRAY_READ_ERRORS, SceneError
 from .meshdata import MeshData
 
 #: a field whose edges disagree in sign (t_i·t_j < 0) on at most this fraction is kept as given
@@ -24,7 +24,7 @@ def load_orientation(path: Path, n_vertices: int, field: str) -> np.ndarray:
             if "u" not in data.files:
                 raise SceneError(f"no array 'u' (it has: {', '.join(data.files) or 'none'})", file=path, field=field)
             u = np.asarray(data["u"], np.float64)
-    except (OSError, ValueError) as exc:
+    except ARRAY_READ_ERRORS as exc:
         raise SceneError(f"not a readable .npz orientation field ({exc})", file=path, field=field) from None
     if u.shape != (n_vertices, 3):
         raise SceneError(

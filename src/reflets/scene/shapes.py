@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from reflets.errors import SceneError
+from reflets.errors import ARRAY_READ_ERRORS, SceneError
+from reflets.quantities import MAX_MAGNITUDE
 from reflets.scene.meshdata import MeshData
 
 from .surfaces import BezierPatch, HeightField
@@ -375,6 +376,8 @@ def heights_problem(heights: np.ndarray) -> str | None:
         return f"heights need at least 2 × 2 samples, got {heights.shape[0]} × {heights.shape[1]}"
     if not np.all(np.isfinite(heights)):
         return "heights must be finite (found NaN or inf)"
+    if np.abs(heights).max() > MAX_MAGNITUDE:
+        return f"heights up to {np.abs(heights).max():.3g}, over {MAX_MAGNITUDE:.0e}"
     return None
 
 
@@ -390,7 +393,7 @@ def load_heights(path: str | Path) -> np.ndarray:
         raise SceneError("height-field file not found", file=path, field="file")
     try:
         grid = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as exc:
+    except ARRAY_READ_ERRORS as exc:
         raise SceneError(f"cannot read as a .npy array ({exc})", file=path, field="file") from None
     if not (np.issubdtype(grid.dtype, np.integer) or np.issubdtype(grid.dtype, np.floating)):
         raise SceneError(f"heights must be real numbers, the file holds {grid.dtype}", file=path, field="file")

@@ -54,6 +54,7 @@ from ..brdf.phong import Phong
 from ..brdf.ward import Ward
 from ..cache import Cache, content_key, file_stamp, source_hash
 from ..errors import RefletsError
+from ..quantities import Positive
 
 #: Table 3.1 of the document: (layers N, spread Θ in degrees, length l, width w, density d)
 PRESETS: dict[str, tuple[int, float, float, float, float]] = {
@@ -78,7 +79,6 @@ SPLAT_BUDGET = 4_000_000
 #: layers whose α is below this are skipped (the document's α-culling)
 ALPHA_CULL = 1e-6
 
-Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 PositiveRGB = tuple[Positive, Positive, Positive]
 
 #: the base BRDF: any material of the library except scratched, translucent and mirror
@@ -183,7 +183,7 @@ class Scratched(Oriented, Material):
         try:
             parse_profile(value)
         except RefletsError as exc:
-            raise ValueError(exc.message) from None
+            raise ValueError(str(exc)) from None  # with the profile's file, when it names one
         return value
 
     @field_validator("alpha_size")

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ArgumentError
+from ..errors import ARRAY_READ_ERRORS, ArgumentError
 
 #: number of bracketing cells of the quartic (a ray crossing the curve twice inside one cell of 1/128 is
 #: missed; that needs a chord closer than ~1e-4 to the curve, see docs of :func:`quartic`)
@@ -235,7 +235,7 @@ def read_profile(path: str | Path) -> Profile:
             x, h = arr[:, 0], arr[:, 1]
     except ArgumentError:
         raise
-    except (ValueError, OSError, IndexError) as exc:
+    except (*ARRAY_READ_ERRORS, IndexError) as exc:
         raise ArgumentError(f"cannot read profile: {exc}", file=path) from None
     profile = from_samples(x, h, name=f"file:{path}")
     return profile

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ArgumentError, OutputError
+from ..errors import ARRAY_READ_ERRORS, ArgumentError, OutputError
 from .profiles import Profile, parse_profile
 from .tracer2d import THETAS, FresnelSpec, Tallies, bin_of, make_fresnel, phi_bins, trace_table
 
@@ -112,7 +112,7 @@ def load_table(path: str | Path) -> ScratchTable:
                 raise ArgumentError(f"not a scratch table (missing {', '.join(missing)})", file=path)
             arrays = {k: data[k] for k in _ARRAYS}
             meta = json.loads(str(data["meta"]))
-    except (OSError, ValueError) as exc:
+    except ARRAY_READ_ERRORS as exc:
         raise ArgumentError(f"cannot read scratch table: {exc}", file=path) from None
     return ScratchTable(**arrays, meta=meta)
 
