@@ -30,6 +30,7 @@ SUITES: dict[str, str] = {
     "gltf": "reflets.bench.gltf:bench_gltf",
     "ar": "reflets.bench.ar:bench_ar",
     "ar-loop": "reflets.bench.ar:bench_ar_loop",
+    "soak": "reflets.bench.soak:bench_soak",
 }
 
 
