@@ -126,3 +126,24 @@ def test_no_gl_at_all_gives_one_line_with_install_hint(tmp_path):
     assert proc.returncode == 2
     assert "unavailable" in proc.stdout and "apt-get install" in proc.stdout
     assert "Traceback" not in proc.stdout + proc.stderr
+
+
+def test_the_program_cache_releases_unused_programs_past_its_bound(ctx, monkeypatch):
+    """Past MAX_PROGRAMS, the least recently used programs nobody holds are released; one a caller (a
+    technique, a vertex array) still holds is kept and stays usable."""
+    from reflets.techniques.shadows import DEPTH_PROGRAM
+
+    spec = ProgramSpec("soak", vertex=DEPTH_PROGRAM.vertex, fragment=DEPTH_PROGRAM.fragment,
+                       flags=frozenset({"VARIANT"}))  # fmt: skip
+    monkeypatch.setattr(programs_module, "MAX_PROGRAMS", 0)
+    programs_module._trim_cache()  # only the programs something holds remain
+    monkeypatch.setattr(programs_module, "MAX_PROGRAMS", len(programs_module._CACHE) + 3)
+    held = get_program(ctx, spec, VARIANT=0)
+    keys = [k for k in programs_module._CACHE if k[1] == spec]
+    for variant in range(1, 8):
+        get_program(ctx, spec, VARIANT=variant)  # nobody keeps these
+    remaining = [k for k in programs_module._CACHE if k[1] == spec]
+    assert keys[0] in remaining  # held: kept, though the least recently used
+    assert len(programs_module._CACHE) <= programs_module.MAX_PROGRAMS
+    assert len(remaining) <= 3
+    assert get_program(ctx, spec, VARIANT=0) is held and held.glo > 0

@@ -15,6 +15,8 @@ Compiled programs are cached per (context, stages, slots, flags).
 from __future__ import annotations
 
 import re
+import sys
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
@@ -152,7 +154,24 @@ class ProgramSpec:
     constants: tuple[tuple[str, str], ...] = ()
 
 
-_CACHE: dict[tuple, object] = {}
+_CACHE: OrderedDict[tuple, object] = OrderedDict()
+#: compiled programs kept past this many are released, least recently used first, when nothing else holds them
+#: (a program compiled for each light count or material flag combination would otherwise accumulate for a whole
+#: session: ~1.7 MB of generated code each on llvmpipe)
+MAX_PROGRAMS = 48
+
+
+def _trim_cache() -> None:
+    """Release least recently used programs over MAX_PROGRAMS that no technique, vertex array or caller holds
+    (CPython's reference count: the cache's own reference and this loop's are the only ones)."""
+    for key in list(_CACHE):
+        if len(_CACHE) <= MAX_PROGRAMS:
+            return
+        program = _CACHE[key]
+        if sys.getrefcount(program) <= 3:  # the cache, ``program`` and getrefcount's argument
+            del _CACHE[key]
+            program.release()
+        del program
 
 
 def get_program(ctx, spec: ProgramSpec, *, slots: dict[str, str] | None = None, **flags):
@@ -169,6 +188,7 @@ def get_program(ctx, spec: ProgramSpec, *, slots: dict[str, str] | None = None, 
         )
     key = (id(ctx), spec, tuple(sorted((slots or {}).items())), tuple(sorted(flags.items())))
     if key in _CACHE:
+        _CACHE.move_to_end(key)
         return _CACHE[key]
     stages = {}
     all_files: dict[str, list[str]] = {}
@@ -197,6 +217,7 @@ def get_program(ctx, spec: ProgramSpec, *, slots: dict[str, str] | None = None, 
             f"program {spec.name} failed to build: " + map_log(text, files).strip().replace("\n", " | ")
         ) from exc
     _CACHE[key] = program
+    _trim_cache()
     return program
 
 
