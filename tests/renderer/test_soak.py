@@ -16,3 +16,5 @@ def test_a_long_session_stays_within_a_budget():
     assert second - first < 150, rows  # measured: +18 MB over 1,000 edits, blocks oscillating by ±70 MB
     assert all(r["programs"] <= programs.MAX_PROGRAMS for r in rows)
     assert all(r["gl_error"] == "GL_NO_ERROR" for r in rows)
+    others = [r["gl_objects"] - r["programs"] for r in rows]  # every GL object but the cached programs
+    assert max(others) - min(others) <= 8, rows

@@ -3,7 +3,8 @@ the resident memory (RSS) and the GL state after each block of them. Four kinds,
 material's parameter (each value its own α maps and table), a microfacet roughness (its own LTC / prefilter
 albedo), the number of point lights (programs are compiled per light count), a sphere's tessellation (a new
 mesh). The persistent renderer takes the material edits; the other variants are one-shot renders. Reported:
-RSS every block, the program cache's size, the GL error flag. Growth that does not level off is a leak."""
+RSS every block, the program cache's size, the live GL objects, the GL error flag. Growth that does not level
+off is a leak."""
 
 from __future__ import annotations
 
@@ -22,6 +23,15 @@ SIZE = (64, 48)
 def _rss_mb() -> float:
     with open("/proc/self/statm") as f:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def gl_objects() -> int:
+    """Live GL objects: moderngl wrappers Python still holds whose GL name is not released (a leak grows this)."""
+    import moderngl
+
+    kinds = (moderngl.Buffer, moderngl.Texture, moderngl.TextureCube, moderngl.Texture3D, moderngl.TextureArray,
+             moderngl.Framebuffer, moderngl.Renderbuffer, moderngl.VertexArray, moderngl.Program)  # fmt: skip
+    return sum(1 for obj in gc.get_objects() if isinstance(obj, kinds) and getattr(obj, "glo", 0) > 0)
 
 
 def _scene(lights: int, segments: int, alpha: float) -> dict:
@@ -53,7 +63,7 @@ def soak(edits: int, block: int) -> list[dict]:
     with warnings.catch_warnings(), Renderer(_scene(1, 32, 0.3), method="auto", size=SIZE) as renderer:
         warnings.simplefilter("ignore", RefletsWarning)  # `forward` on the scratched plane: its base BRDF, said
         renderer.render()
-        rows.append({"edits": 0, "rss_mb": _rss_mb(), "programs": len(PROGRAMS), "gl_error": ctx.error})
+        rows.append(_row(0, PROGRAMS, ctx))
         for k in range(1, edits + 1):
             kind = k % 4
             if kind == 0:  # a scratched material's parameter: new α maps
@@ -68,8 +78,13 @@ def soak(edits: int, block: int) -> list[dict]:
                 reflets.render(_scene(1, 8 + 2 * (k % 200), 0.3), method="forward", size=SIZE)
             if k % block == 0:
                 gc.collect()
-                rows.append({"edits": k, "rss_mb": _rss_mb(), "programs": len(PROGRAMS), "gl_error": ctx.error})
+                rows.append(_row(k, PROGRAMS, ctx))
     return rows
+
+
+def _row(edits: int, programs, ctx) -> dict:
+    return {"edits": edits, "rss_mb": _rss_mb(), "programs": len(programs), "gl_objects": gl_objects(),
+            "gl_error": ctx.error}  # fmt: skip
 
 
 def bench_soak(quick: bool, out_dir) -> tuple[dict, str]:
@@ -89,8 +104,9 @@ def bench_soak(quick: bool, out_dir) -> tuple[dict, str]:
           f"RSS {rows[0]['rss_mb']:.0f} MB at the start, {half['rss_mb']:.0f} MB after {half['edits']} edits, "
           f"{rows[-1]['rss_mb']:.0f} MB after {edits} (+{growth:.0f} MB); compiled programs cached: "
           f"{rows[-1]['programs']}; GL error flag at the end: {rows[-1]['gl_error']}; {seconds:.0f} s.", "",
-          "| edits | RSS MB | programs | GL error |", "|---|---|---|---|"]  # fmt: skip
-    md += [f"| {r['edits']} | {r['rss_mb']:.0f} | {r['programs']} | {r['gl_error']} |" for r in rows]
+          "| edits | RSS MB | programs | live GL objects | GL error |", "|---|---|---|---|---|"]  # fmt: skip
+    md += [f"| {r['edits']} | {r['rss_mb']:.0f} | {r['programs']} | {r['gl_objects']} | {r['gl_error']} |"
+           for r in rows]  # fmt: skip
     return {"edits": edits, "rows": rows, "seconds": seconds}, "\n".join(md) + "\n"
 
 
