@@ -24,3 +24,25 @@ def test_captions_and_default_shadows_keep_the_fingerprint_a_real_change_does_no
     unshadowed = [{"type": "point", "position": [0, 2, 0], "intensity": [1, 1, 1], "shadows": False}]
     assert fingerprint(scene(light=unshadowed), spp=4, seed=0)[0] != base
     assert fingerprint(scene(), spp=8, seed=0)[0] != base
+
+
+def test_the_stored_benchmark_references_still_match_their_scenes():
+    """Every volumetric reference under benchmarks/results/references (one took 38 minutes) is found for the
+    benchmark scene it was made from: fields added to the scene model since (at their defaults), a caption, a
+    translucent material's real-time profile do not invalidate it."""
+    from pathlib import Path
+
+    from reflets.bench import translucency
+    from reflets.bench.renderer import showcase_scene
+    from reflets.reference import store
+
+    folder = Path(__file__).resolve().parents[2] / "benchmarks" / "results" / "references"
+    cases = [(showcase_scene((160, 120), meshes={"marble"}, lights={light}),
+              f"renderer_marble_{'' if light == 'point' else light + '_'}160x120_32spp.npz", 32, 0)
+             for light in ("point", "quad", "environment")]  # fmt: skip
+    cases += [(translucency._object_scene("bunny.ply", "skin1", 100.0, size, eta=eta),
+               f"translucency_bunny_eta{eta:g}_{size[0]}x{size[1]}_{spp}spp.npz", spp, seed)
+              for eta, size, spp, seed in ((1.0, (384, 288), 48, 7), (1.3, (1024, 768), 32, 11))]  # fmt: skip
+    for scene, name, spp, seed in cases:
+        digest, _ = store.fingerprint(scene, spp=spp, seed=seed)
+        assert store.load(folder / name, digest) is not None, name

@@ -38,13 +38,30 @@ PRESENTATION_KEYS = ("title", "description")
 
 def _digest(description: dict) -> str:
     """The digest of what determines the image: the description without its presentation keys, and without
-    light keys at the default that reproduces how older references were made (``shadows = true``: traced), so
-    that editing a caption or adding such a field keeps stored references valid (one of them took 38 minutes)."""
+    keys at the default that reproduces how older references were made (a light's ``shadows = true``: traced; a
+    centred camera with square pixels), so that editing a caption or adding such a field keeps stored references
+    valid (one of them took 38 minutes)."""
     scene = {k: v for k, v in description["scene"].items() if k not in PRESENTATION_KEYS}
     scene["light"] = [
         {k: v for k, v in light.items() if not (k == "shadows" and v is True)} for light in scene.get("light", [])
     ]
+    if "camera" in scene:  # a calibrated camera's fields, at the pinhole the older references were made with
+        scene["camera"] = {k: v for k, v in scene["camera"].items() if (k, v) not in _CENTRED_CAMERA}
+    scene["materials"] = {name: _volumetric_material(m) for name, m in scene.get("materials", {}).items()}
     return content_key({**description, "scene": scene}, length=16)
+
+
+def _volumetric_material(material: dict) -> dict:
+    """A material as the volumetric reference sees it: fields left unset (None: added later, optional) dropped,
+    in nested materials too (a scratched material's base), and a translucent material's real-time model (its
+    diffusion ``profile``, ``single_scattering``) — the path tracer simulates the medium itself."""
+    real_time = ("profile", "single_scattering") if material.get("type") == "translucent" else ()
+    return {k: _volumetric_material(v) if isinstance(v, dict) and "type" in v else v
+            for k, v in material.items() if v is not None and k not in real_time}  # fmt: skip
+
+
+#: camera fields at their defaults (added after references were stored: the same image)
+_CENTRED_CAMERA = (("principal_offset", [0.0, 0.0]), ("pixel_aspect", 1.0))
 
 
 def save(path: Path, image, digest: str, description: dict, seconds: float) -> None:
