@@ -3,9 +3,10 @@ technique's cost on the document's Fig 7.2 settings.
 
 1. **Slab total reflectance** (all twelve presets, per channel, normal incidence): the volumetric Monte Carlo
    of a semi-infinite slab (reflets.reference.volumetric) split into single and multiple scattering, against
-   the total reflectance of the dipole, the better dipole and normalised diffusion (the better dipole's
-   energy by construction). Relative errors against the multiple-scattering part (what S_d models; single
-   scattering is its own term).
+   the total reflectance of the default ``multiple_fit`` (multiple scattering only, fitted to a Monte Carlo
+   table of its own: tools/tabulate_multiple_scattering.py), the dipole, the better dipole and normalised
+   diffusion (the better dipole's energy by construction). Relative errors against the multiple-scattering part
+   (what S_d models; single scattering is its own term).
 2. **GPU on a flat slab**: multiple scattering of a uniformly lit slab against F_T F_T R_total/(πc), single
    scattering against the Hanrahan–Krueger closed form.
 3. **Cost on the document's Fig 7.2 objects** (bunny 100 mm skin1, dragon marble) at the document's 1024×768,
@@ -30,6 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
+#: the default (multiple scattering only, fitted to Monte Carlo) beside the document's three
+PROFILES_COMPARED = ("multiple_fit", "dipole", "better_dipole", "normalized_diffusion")
+
 #: (label, rings, angles, radius in mean free paths): the document's Fig 7.2 settings
 FIG_72 = [("168 / 10 mfp", 12, 14, 10.0), ("336 / 15 mfp", 21, 16, 15.0), ("1200 / 30 mfp", 40, 30, 30.0)]
 
@@ -41,7 +45,7 @@ def _slab_table(photons: int) -> list[dict]:
     rows = []
     for name in PRESETS:
         medium = Medium.preset(name)
-        models = {p: total_reflectance(p, medium) for p in ("dipole", "better_dipole", "normalized_diffusion")}
+        models = {p: total_reflectance(p, medium) for p in PROFILES_COMPARED}
         for c, channel in enumerate("rgb"):
             mc = slab_reflectance(medium.channel(c), photons, seed=17 * c + 1)
             row = {
@@ -63,7 +67,7 @@ def _slab_gpu() -> dict:
     import reflets
 
     from ..translucency import half_space_single_scattering
-    from ..translucency.optics import fresnel_transmittance
+    from ..translucency.optics import diffuse_normalisation, fresnel_transmittance
 
     out = {}
     for preset in ("skin1", "marble", "ketchup"):
@@ -78,7 +82,7 @@ def _slab_gpu() -> dict:
         material = scene.materials["m"]
         medium = material.medium()
         ft = fresnel_transmittance(1.0, material.eta)
-        expected_ms = ft * ft * material.diffuse_factor()
+        expected_ms = ft * ft * material.total_reflectance() / (np.pi * diffuse_normalisation(material.eta))
         ms = reflets.render(scene, method="translucent", terms=["multiple"])[14:18, 14:18].mean(axis=(0, 1))
         ss = reflets.render(scene, method="translucent", terms=["single"])[14:18, 14:18].mean(axis=(0, 1))
         expected_ss = half_space_single_scattering(medium, 1.0, 1.0)
@@ -242,7 +246,7 @@ def _bunny_errors(size, spp: int, settings, out_dir: Path, frames: int) -> dict:
     keep, fireflies, noise = _compared_pixels(ref)
     write_image(out_dir / "translucency_bunny_reference.png", ref.image)
     rows = []
-    for profile in ("dipole", "better_dipole", "normalized_diffusion"):
+    for profile in PROFILES_COMPARED:
         scene = _object_scene("bunny.ply", "skin1", 100.0, size, eta=1.0, profile=profile)
         for label, rings, angles, radius in [("default (168, capture radius)", 12, 14, None), *settings]:
             params = {"rings": rings, "angles": angles, "radius_mfp": radius}
@@ -273,14 +277,22 @@ def _curvature_rows(bunny_ref, size) -> list[dict]:
     from ..reference.volumetric import render_volumetric
 
     cases = []
-    for profile in ("dipole", "better_dipole", "normalized_diffusion"):
+    for profile in PROFILES_COMPARED:
         scene = _object_scene("bunny.ply", "skin1", 100.0, size, eta=1.0, profile=profile)
         cases.append((f"bunny 100 mm, {profile}", scene, bunny_ref))
     for radius_mm in (5.0, 2.5):
         scene = reflets.load_dict(
             {
                 "camera": {"position": [0, 0.5, 3], "look_at": [0, 0, 0], "fov_y": 35, "size": [96, 72]},
-                "materials": {"m": {"type": "translucent", "preset": "skin1", "eta": 1.0, "mm_per_unit": radius_mm}},
+                "materials": {
+                    "m": {
+                        "type": "translucent",
+                        "preset": "skin1",
+                        "eta": 1.0,
+                        "mm_per_unit": radius_mm,
+                        "profile": "better_dipole",
+                    }
+                },
                 "mesh": [{"shape": "sphere", "radius": 1.0, "material": "m"}],
                 "light": [{"type": "point", "position": [2, 3, 2], "intensity": [20, 20, 20]}],
             }
@@ -325,7 +337,7 @@ def _bunny_document(size, spp: int, settings, out_dir: Path, frames: int) -> dic
     write_image(out_dir / "translucency_bunny_eta13_reference.png", ref.image)
     cases = [
         (profile, label, {"rings": rings, "angles": angles, "radius_mfp": radius})
-        for profile in ("dipole", "better_dipole", "normalized_diffusion")
+        for profile in PROFILES_COMPARED
         for label, rings, angles, radius in [("default (168, capture radius)", 12, 14, None), *settings]
     ]
     cases += [("better_dipole", label, params) for label, params in DOCUMENT_OPTIONS]
@@ -334,10 +346,11 @@ def _bunny_document(size, spp: int, settings, out_dir: Path, frames: int) -> dic
         scene = _object_scene("bunny.ply", "skin1", 100.0, size, eta=1.3, profile=profile)
         image, row = _error_row(scene, size, frames, ref, (keep, noise), {"terms": ("single", "multiple"), **params})
         rows.append({"profile": profile, "setting": label, **row})
-        if label.startswith("default (") and profile == "better_dipole":
-            write_image(out_dir / "translucency_bunny_eta13_better_dipole.png", image)
-            default_image = image
-    sensitivity = []  # the better dipole's default against the firefly threshold
+        if label.startswith("default (") and profile in ("better_dipole", "multiple_fit"):
+            write_image(out_dir / f"translucency_bunny_eta13_{profile}.png", image)
+            if profile == "multiple_fit":
+                default_image = image
+    sensitivity = []  # the default profile's image against the firefly threshold
     for threshold in (10.0, FIREFLY_STDERR, 100.0, 1000.0, np.inf):
         pixels, left_out, own = _compared_pixels(ref, threshold)
         error = _relmse(default_image, ref.image, pixels)
@@ -424,13 +437,16 @@ def _markdown(r: dict) -> str:
         "Monte Carlo single / multiple scattering per unit transmitted flux; model totals ∫2πr R_d dr and their "
         "relative error against the Monte Carlo's multiple scattering.",
         "",
-        "| preset | ch | MC single | MC multiple (± stderr) | dipole | better dipole | normalised diffusion |",
-        "|---|---|---|---|---|---|---|",
+        "| preset | ch | MC single | MC multiple (± stderr) | multiple fit | dipole | better dipole | "
+        "normalised diffusion |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for row in r["slab"]:
         lines.append(
             f"| {row['preset']} | {row['channel']} | {row['mc_single']:.4f} | {row['mc_multiple']:.4f} "
-            f"(± {row['mc_multiple_stderr']:.4f}) | {row['dipole']:.4f} ({_pct(row['dipole_rel_error'])}) | "
+            f"(± {row['mc_multiple_stderr']:.4f}) | "
+            f"{row['multiple_fit']:.4f} ({_pct(row['multiple_fit_rel_error'])}) | "
+            f"{row['dipole']:.4f} ({_pct(row['dipole_rel_error'])}) | "
             f"{row['better_dipole']:.4f} ({_pct(row['better_dipole_rel_error'])}) | "
             f"{row['normalized_diffusion']:.4f} ({_pct(row['normalized_diffusion_rel_error'])}) |"
         )
@@ -441,7 +457,8 @@ def _markdown(r: dict) -> str:
     lines += [
         "",
         "Median |relative error| over presets and channels — against the Monte Carlo's multiple scattering "
-        f"(what S_d models next to the explicit single-scattering term): dipole "
+        f"(what S_d models next to the explicit single-scattering term): multiple fit "
+        f"{median_error('multiple_fit', '_rel_error'):.1%} (the table's own photons differ from these), dipole "
         f"{median_error('dipole', '_rel_error'):.1%}, better dipole {median_error('better_dipole', '_rel_error'):.1%}; "
         "against its total (single + multiple, what a diffusion profile alone would stand for): dipole "
         f"{median_error('dipole', '_rel_error_total'):.1%}, better dipole "
@@ -489,7 +506,7 @@ def _markdown(r: dict) -> str:
         "",
         *_error_table(d["rows"]),
         "",
-        "The better dipole's default against the firefly threshold (× the median standard error; inf: none left out):",
+        "The default (multiple fit) against the firefly threshold (× the median standard error; inf: none left out):",
         "",
         "| threshold | pixels left out | reference noise | relative MSE | less noise |",
         "|---|---|---|---|---|",
@@ -504,6 +521,7 @@ def _markdown(r: dict) -> str:
     ]
     lines += [
         "![reference](translucency_bunny_eta13_reference.png) "
+        "![multiple fit](translucency_bunny_eta13_multiple_fit.png) "
         "![better dipole](translucency_bunny_eta13_better_dipole.png)"
     ]
     e = r["bunny_error"]
@@ -537,7 +555,8 @@ def _markdown(r: dict) -> str:
         "",
         "![error vs time, η = 1](translucency_error_time_eta1.png)",
         "",
-        "![reference](translucency_bunny_reference.png) ![better dipole](translucency_bunny_better_dipole.png)",
+        "![reference](translucency_bunny_reference.png) ![multiple fit](translucency_bunny_multiple_fit.png) "
+        "![better dipole](translucency_bunny_better_dipole.png)",
         "",
         "![slab errors](translucency.png)",
         "",
@@ -574,10 +593,15 @@ def plot(rows: list[dict], path: Path) -> None:
     x = np.arange(len(rows))
     fig, ax = plt.subplots(figsize=(12, 3.8))
     for k, (p, name) in enumerate(
-        (("dipole", "dipole"), ("better_dipole", "better dipole"), ("normalized_diffusion", "normalised diffusion"))
+        (
+            ("multiple_fit", "multiple fit (default)"),
+            ("dipole", "dipole"),
+            ("better_dipole", "better dipole"),
+            ("normalized_diffusion", "normalised diffusion"),
+        )
     ):
         err = [100 * (r[f"{p}_rel_error"] or 0.0) for r in rows]
-        ax.bar(x + (k - 1) * 0.28, err, width=0.28, label=name)
+        ax.bar(x + (k - 1.5) * 0.21, err, width=0.21, label=name)
     ax.axhline(0, color="k", lw=0.6)
     ax.set_xticks(x, labels, rotation=90, fontsize=7)
     ax.set_ylabel("% error vs volumetric MC")

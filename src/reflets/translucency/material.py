@@ -8,7 +8,9 @@ over the surface, i.e. the light a uniformly lit flat sample re-emits:
 
     f_r = F_R(h) D G / (4 cosθ_o cosθ_i) + F_T(θ_i) F_T(θ_o) R_total / (π c),   c = 1 − 2 C_1^out,
 
-R_total = ∫ 2πr R_d(r) dr of the chosen profile (per channel) and C_1^out the first Fresnel moment for light
+R_total = ∫ 2πr R_d(r) dr of the chosen profile (per channel; for ``multiple_fit``, which models multiple
+scattering only, plus single scattering's exitance at normal incidence, so that R_total stands for all orders
+as the other profiles do) and C_1^out the first Fresnel moment for light
 arriving from outside, so that ∫ (diffuse term) cosθ_o dω_o = F_T(θ_i) R_total (d'Eon's normalisation).
 ``roughness = 0`` means a smooth interface: no glossy lobe for point lights (the mirror reflection is not
 represented by a BRDF). Coefficients are per millimetre; ``mm_per_unit`` converts scene units.
@@ -47,8 +49,10 @@ class Translucent(Material):
         Relative index of refraction n_inside / n_outside; 1 = index-matched boundary (no Fresnel, no refraction).
     roughness : float ≥ 0, default 0
         Beckmann m of the specular interface; 0 = smooth (no glossy highlight).
-    profile : "dipole" | "better_dipole" | "normalized_diffusion", default "better_dipole"
-        Diffusion profile of the multiple scattering.
+    profile : "multiple_fit" | "dipole" | "better_dipole" | "normalized_diffusion", default "multiple_fit"
+        Diffusion profile of the multiple scattering: ``multiple_fit`` models two or more scattering events only
+        (fitted to volumetric Monte Carlo; the single-scattering term adds the first); the document's three
+        stand for all orders, so that with single scattering on they count it twice.
     single_scattering : bool, default true
         Add the single-scattering term (technique ``translucent``).
     mm_per_unit : float > 0, default 1
@@ -63,7 +67,7 @@ class Translucent(Material):
     g: float = Field(0.0, gt=-1, lt=1)
     eta: float | None = Field(None, ge=1.0, le=3.0)
     roughness: float = Field(0.0, ge=0.0, le=1.0)
-    profile: Literal["dipole", "better_dipole", "normalized_diffusion"] = "better_dipole"
+    profile: Literal["dipole", "better_dipole", "normalized_diffusion", "multiple_fit"] = "multiple_fit"
     single_scattering: bool = True
     mm_per_unit: float = Field(1.0, gt=0, allow_inf_nan=False)
     glsl = "reflets/translucency/shaders/translucent.glsl"
@@ -117,10 +121,12 @@ class Translucent(Material):
         return total_reflectance(self.profile, self.medium())
 
     def diffuse_factor(self) -> np.ndarray:
-        """R_total / (π c) per channel: the far-field diffuse term without its two Fresnel transmittances."""
+        """R_total / (π c) per channel: the far-field diffuse term without its two Fresnel transmittances
+        (R_total of all orders: profiles.far_field_reflectance)."""
         from ..translucency.optics import diffuse_normalisation
+        from ..translucency.profiles import far_field_reflectance
 
-        return self.total_reflectance() / (np.pi * diffuse_normalisation(self.eta))
+        return far_field_reflectance(self.profile, self.medium()) / (np.pi * diffuse_normalisation(self.eta))
 
     @property
     def reciprocal(self) -> bool:

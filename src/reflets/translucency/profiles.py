@@ -5,7 +5,9 @@
 - ``normalized_diffusion``: Christensen & Burley 2015, R(r) = A s (e^{−sr} + e^{−sr/3}) / (8π r), fitted to
   brute-force Monte Carlo; A is the total diffuse reflectance, s = (1.85 − A + 7|A − 0.8|³) / ℓ with ℓ = 1/σ_t
   (their "searchlight" fit); we take A from the better dipole's total reflectance so that the three profiles
-  carry comparable energy and need only σ_a, σ'_s, η.
+  carry comparable energy and need only σ_a, σ'_s, η;
+- ``multiple_fit`` (the default): multiple scattering only — two or more events — fitted to volumetric Monte
+  Carlo of a semi-infinite slab (multiple_fit.py), so that the single-scattering term is not counted twice.
 
 The table (corrected from the document, see the note's errata — the real source lies inside the medium, the
 better dipole's C_E is ½(1 − 3C_2), not "1/42"):
@@ -23,10 +25,11 @@ import functools
 import numpy as np
 from scipy import integrate
 
+from . import multiple_fit
 from .medium import Medium
 from .optics import fresnel_moment_fit
 
-PROFILES = ("dipole", "better_dipole", "normalized_diffusion")
+PROFILES = ("dipole", "better_dipole", "normalized_diffusion", "multiple_fit")
 
 
 def _dipole_terms(medium: Medium, better: bool) -> dict[str, np.ndarray]:
@@ -98,6 +101,8 @@ def profile_rd(profile: str, r, medium: Medium) -> np.ndarray:
         return dipole_rd(r, medium, better=True)
     if profile == "normalized_diffusion":
         return normalized_diffusion_rd(r, medium)
+    if profile == "multiple_fit":
+        return multiple_fit.multiple_fit_rd(r, medium, better_dipole_reduced_total)
     raise ValueError(f"unknown profile {profile!r}; allowed: {', '.join(PROFILES)}")
 
 
@@ -114,6 +119,9 @@ def total_reflectance(profile: str, medium: Medium) -> np.ndarray:
 def _total_reflectance(profile: str, sigma_a: tuple, sigma_s: tuple, g: float, eta: float) -> tuple:
     if profile == "normalized_diffusion":  # normalised by construction: ∫ = A, the better dipole's
         return _total_reflectance("better_dipole", sigma_a, sigma_s, g, eta)
+    if profile == "multiple_fit":  # normalised by construction: ∫ = A, the Monte Carlo's
+        medium = Medium(np.array(sigma_a), np.array(sigma_s), g, eta)
+        return tuple(float(a) for a in np.atleast_1d(multiple_fit_parameters(medium)["A"]))
     out = []
     for a, s in zip(sigma_a, sigma_s, strict=True):
         m = Medium(np.float64(a), np.float64(s), g, eta)
@@ -129,6 +137,27 @@ def _total_reflectance(profile: str, sigma_a: tuple, sigma_s: tuple, g: float, e
     return tuple(out)
 
 
+def better_dipole_reduced_total(albedo_prime: float, eta: float) -> float:
+    """The better dipole's ∫2πr R_d dr at reduced albedo α' (σ'_t = 1): what multiple_fit's energy table is
+    interpolated relative to."""
+    medium = Medium(np.float64(1.0 - albedo_prime), np.float64(albedo_prime), 0.0, eta)
+    return float(np.ravel(total_reflectance("better_dipole", medium))[0])
+
+
+def multiple_fit_parameters(medium: Medium) -> dict[str, np.ndarray]:
+    """Per channel A, w, s1, s2 (1/mm), z1, z2 (mm) of ``multiple_fit`` (multiple_fit.py)."""
+    return multiple_fit.parameters(medium, better_dipole_reduced_total)
+
+
+def far_field_reflectance(profile: str, medium: Medium) -> np.ndarray:
+    """What a uniformly lit flat sample re-emits per unit transmitted flux, all orders: the profile's total, plus
+    single scattering at normal incidence for ``multiple_fit`` (the far-field BRDF has no separate term)."""
+    total = total_reflectance(profile, medium)
+    if profile == "multiple_fit":
+        return total + multiple_fit.single_scattering_albedo(medium)
+    return total
+
+
 def glsl_uniforms(profile: str, medium: Medium) -> dict[str, tuple]:
     """Per-channel constants of ``profile_rd`` in shaders/profiles.glsl (vec3 uniforms ``p_*``, mm units)."""
 
@@ -138,6 +167,14 @@ def glsl_uniforms(profile: str, medium: Medium) -> dict[str, tuple]:
     if profile == "normalized_diffusion":
         A, s = normalized_diffusion_parameters(medium)
         return {"p_A": vec(A), "p_s": vec(s)}
+    if profile == "multiple_fit":
+        p = multiple_fit_parameters(medium)
+        cosines, factors = multiple_fit.incidence_table(medium)
+        return {
+            **{f"p_{key}": vec(value) for key, value in p.items()},
+            "p_incidence_cos": cosines.astype(np.float32).tobytes(),
+            "p_incidence": factors.astype(np.float32).tobytes(),
+        }
     t = _dipole_terms(medium, better=profile == "better_dipole")
     return {
         "p_zr": vec(t["z_r"]),

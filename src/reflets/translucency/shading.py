@@ -20,6 +20,7 @@ from ..techniques.forward import LIGHT_FLAGS
 from ..techniques.prepared import PreparedScene
 from ..techniques.shading import MaterialShading
 from ..techniques.shadows import directional_view
+from . import multiple_fit
 from . import rings as rings_module
 from .material import Translucent
 from .optics import diffuse_normalisation
@@ -272,6 +273,8 @@ def ring_radii(params, material: Translucent, medium) -> np.ndarray:
     radii = []
     for w, radius in zip(weights, r_max, strict=True):
         beta = p.beta
+        if beta is None and material.profile == "multiple_fit":
+            beta = multiple_fit.RING_BETA
         if beta is None:
 
             def rd(r_mm, w=w):

@@ -13,7 +13,9 @@ Passes per frame:
    - **single scattering**: a march along the refracted view ray at k_max + 1 truncated-exponential depths per
      colour channel (c_l mean free paths deep), the light's path to each depth read from the light view and
      Snell-corrected, integrated by the trapezoid rule (``ss_rule = "step"``: the document's biased sum);
-   - **multiple scattering**: R_d (dipole, better dipole or normalised diffusion) integrated over ``rings`` ×
+   - **multiple scattering**: R_d (``multiple_fit`` by default — multiple scattering only, fitted to volumetric
+     Monte Carlo, the light entering each node weighted by its incidence factor — or the document's dipole,
+     better dipole or normalised diffusion, which stand for all orders) integrated over ``rings`` ×
      ``angles`` nodes in the plane through the point orthogonal to the light, radii r_max f_β(j/K) (β fitted
      per material; ``ring_sets = "per_channel"``: β and r_max per channel, as the document, three times the
      light-map reads), each node's value R_d(true distance to the surface point the light sees) × transmitted
@@ -120,7 +122,7 @@ class Translucency(Forward):
     """Translucent materials: single scattering + diffusion profiles through a light view (module docstring)."""
 
     name: ClassVar[str] = "translucent"
-    summary: ClassVar[str] = "translucent materials: single scattering + dipole / better dipole / normalised diffusion"
+    summary: ClassVar[str] = "translucent materials: single scattering + a diffusion profile (multiple_fit, dipoles…)"
     Params: ClassVar = TranslucencyParams
     auto_order: ClassVar[int] = 0
     one_light_per_pass: ClassVar[bool] = True

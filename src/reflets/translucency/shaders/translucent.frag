@@ -265,13 +265,13 @@ vec3 ring_node(int view, vec3 x, vec3 p, out float r, out vec3 xs, out vec3 ns, 
         r = length(xs - x) * a_mm_per_unit;
         float cos_l = dot(ns, to_light(xs));
         float cos_o = max(dot(ns, normalize(u_eye - xs)), 0.05);
-        return beam * cos_l / cos_o;
+        return beam * profile_incidence(cos_l) * cos_l / cos_o;
     }
 #endif
     surface = light_lookup(p, xs, ns);
     if (!surface || !entering(xs, ns, beam, travel, cos_ratio)) return vec3(0.0);
     r = length(xs - x) * a_mm_per_unit;
-    return beam;
+    return beam * profile_incidence(dot(ns, to_light(xs)));
 }
 
 #if CURVATURE_REJECTION
@@ -315,6 +315,7 @@ vec3 profile_integral(int view, vec3 x, vec3 n, vec3 wo, int ring_set) {
             xs_c = xi_c;
             ns_c = ni_c;
             surface_c = entering(xs_c, ns_c, beam_c, travel, cos_ratio);
+            beam_c *= profile_incidence(dot(ns_c, to_light(xs_c)));
         }
     } else if (surface_c) {
         r_c = light_distance(x, xs_c) * a_mm_per_unit;  // through the medium, from where the light enters
