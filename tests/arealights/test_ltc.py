@@ -19,6 +19,7 @@ from reflets.arealights.base import polygon_record
 from reflets.brdf import Lambert, Microfacet, Phong
 from reflets.gpu import ProgramSpec, get_program
 from reflets.gpu import programs as programs_module
+from reflets.metrics import flip
 from reflets.scene.model import PolygonLight, QuadLight
 
 SIZE = (100, 75)
@@ -41,9 +42,9 @@ def bench_scene(material: dict, lights=None, size=SIZE):
     )
 
 
-def plane_mask(scene) -> np.ndarray:
+def plane_mask(scene, size=SIZE) -> np.ndarray:
     """Pixels that see the plane, not an emitter in front of it."""
-    positions = reflets.render(scene, method="position", size=SIZE).astype(np.float64)
+    positions = reflets.render(scene, method="position", size=size).astype(np.float64)
     mask = (np.abs(positions[..., 1]) < 1e-4) & np.any(positions != 0, axis=-1)
     eye = np.asarray(scene.camera.position, dtype=np.float64)
     for light in scene.light:
@@ -75,7 +76,9 @@ def probe(ctx, monkeypatch):
     real = programs_module.read_source
     monkeypatch.setattr(programs_module, "read_source", lambda name: files.get(name) or real(name))
 
-    def run(name: str, body: str, inputs: np.ndarray, size=(8, 8), polygons: list | None = None) -> np.ndarray:
+    def run(
+        name: str, body: str, inputs: np.ndarray, size=(8, 8), polygons: list | None = None, base_power: int = 1
+    ) -> np.ndarray:
         files[f"reflets/test/{name}.comp"] = (
             '#include "reflets/arealights/shaders/polygon.glsl"\n'
             '#include "reflets/arealights/shaders/ltc.glsl"\n'
@@ -83,10 +86,9 @@ def probe(ctx, monkeypatch):
             "layout(std430, binding = 0) readonly buffer In { vec4 inputs[]; };\n"
             "layout(std430, binding = 1) writeonly buffer Out { vec4 outputs[]; };\n" + body
         )
-        spec = ProgramSpec(
-            f"ltc_probe_{name}", compute=f"reflets/test/{name}.comp", flags=frozenset(ltc_fit.glsl_defines(size))
-        )
-        program = get_program(ctx, spec, **ltc_fit.glsl_defines(size))
+        defines = ltc_fit.glsl_defines(size, base_power=base_power)
+        spec = ProgramSpec(f"ltc_probe_{name}", compute=f"reflets/test/{name}.comp", flags=frozenset(defines))
+        program = get_program(ctx, spec, **defines)
         data = np.ascontiguousarray(inputs, dtype=np.float32).reshape(-1, 4)
         n = len(data) // (inputs.shape[-2] if inputs.ndim == 3 else 1)
         buffers = [ctx.buffer(data.tobytes()), ctx.buffer(reserve=16 * n)]
@@ -188,7 +190,8 @@ def test_branchless_clipped_polygon_integral_matches_clip_then_integrate(probe, 
         "void main() { uint c = gl_GlobalInvocationID.x;"
         " mat3 T = mat3(inputs[4 * c].xyz, inputs[4 * c + 1].xyz, inputs[4 * c + 2].xyz);"
         " int i = int(inputs[4 * c + 3].w);"
-        " outputs[c] = vec4(ltc_polygon_integral(i, area_light(i).n, T, inputs[4 * c + 3].xyz), 0.0, 0.0, 0.0); }",
+        " float v = ltc_polygon_integral(i, area_light(i).n, T, inputs[4 * c + 3].xyz, false, 0.0);"
+        " outputs[c] = vec4(v, 0.0, 0.0, 0.0); }",
         np.array(cases),
         polygons=lights,
     )
@@ -196,6 +199,43 @@ def test_branchless_clipped_polygon_integral_matches_clip_then_integrate(probe, 
     straddling = sum(0 < e < 0.5 for e in expected)
     assert straddling > 50, "the cases must exercise the clipping"
     np.testing.assert_allclose(out[:, 0], expected, atol=2e-6, rtol=2e-5)
+
+
+def test_mixture_polygon_integral_matches_the_float64_twin_in_glsl(probe, rng):
+    """ltc_polygon_integral with a cos³¹ mixture table (Arvo's recurrence per clipped edge, the support window)
+    against ltc_fit.polygon_integral (Sutherland–Hodgman, float64), for random quads and triangles seen through
+    random transforms: many straddle the horizon, some lie wholly outside the cosⁿ lobe's support cone."""
+    lights = [
+        QuadLight(type="quad", corners=[[-0.5, 1, -0.5], [0.5, 1, -0.5], [-0.5, 1, 0.5]], radiance=(1, 1, 1)),
+        QuadLight(type="quad", corners=[[-1, 0.2, -1], [1, 0.3, -1], [-1, -0.4, 1]], radiance=(1, 1, 1)),
+        PolygonLight(type="polygon", vertices=[[0, 0.5, 0], [1, 0.5, 0.2], [0.3, 0.6, 1]], radiance=(1, 1, 1)),
+    ]
+    power = 31
+    cases, expected, cosine = [], [], []
+    for _ in range(300):
+        i = int(rng.integers(len(lights)))
+        t = rng.normal(size=(3, 3)) + 2.0 * np.eye(3)
+        x = rng.normal(size=3) * 0.7
+        weight = float(rng.choice([1.0, rng.random()]))
+        cases.append(np.stack([np.r_[t[:, 0], weight], np.r_[t[:, 1], 0], np.r_[t[:, 2], 0], np.r_[x, i]]))
+        vertices = (lights[i].polygon() - x) @ t.T
+        expected.append(ltc_fit.polygon_integral(vertices, power, weight))
+        cosine.append((1.0 - weight) * ltc_fit.polygon_integral(vertices))
+    out = probe(
+        "polygon_power",
+        "void main() { uint c = gl_GlobalInvocationID.x;"
+        " mat3 T = mat3(inputs[4 * c].xyz, inputs[4 * c + 1].xyz, inputs[4 * c + 2].xyz);"
+        " int i = int(inputs[4 * c + 3].w);"
+        " float v = ltc_polygon_integral(i, area_light(i).n, T, inputs[4 * c + 3].xyz, true, inputs[4 * c].w);"
+        " outputs[c] = vec4(v, 0.0, 0.0, 0.0); }",
+        np.array(cases),
+        polygons=lights,
+        base_power=power,
+    )
+    expected, cosine = np.array(expected), np.array(cosine)
+    assert sum(0 < e < 0.5 for e in expected) > 50, "the cases must exercise the clipping"
+    assert np.sum((expected == cosine) & (expected > 0)) > 5, "and the support window"
+    np.testing.assert_allclose(out[:, 0], expected, atol=1e-5, rtol=1e-4)
 
 
 # ------------------------------------------------------------------------------ the LTC and the fitter
@@ -218,6 +258,67 @@ def test_ltc_of_a_polygon_is_lambert_of_the_transformed_polygon():
     quadrature = np.sum(ltc_fit.ltc_density(minv, w) * d_omega)
     transformed = poly @ ltc_fit.minv_matrix(minv).T
     assert quadrature == pytest.approx(_clipped_lambert(transformed), rel=1e-4)
+
+
+def _area_quadrature(density, corners, n: int = 600) -> float:
+    """∫ density(ω) dω over the parallelogram ``corners`` (c1, c2, c4) by an n×n midpoint rule in area."""
+    c1, c2, c4 = (np.asarray(c, dtype=np.float64) for c in corners)
+    t = (np.arange(n) + 0.5) / n
+    u, v = np.meshgrid(t, t)
+    e1, e2 = c2 - c1, c4 - c1
+    y = c1 + u[..., None] * e1 + v[..., None] * e2
+    r2 = np.sum(y * y, axis=-1)
+    w = y / np.sqrt(r2)[..., None]
+    normal = np.cross(e1, e2)
+    area = np.linalg.norm(normal)
+    return float(np.sum(density(w) * np.abs(w @ normal) / area / r2) * area / n**2)
+
+
+@pytest.mark.parametrize("weight", [1.0, 0.4])
+def test_mixture_polygon_integral_is_the_integral_of_the_mixture_density(weight):
+    """Arvo's recurrence (ltc_fit.polygon_integral, the twin of the shader) integrates the mixture
+    (1 − β) cos + β cos³¹ seen through M exactly where the polygon reaches into the cos³¹ lobe's support cone;
+    a polygon wholly outside it loses the cos³¹ part, at most SUPPORT_MASS of the lobe."""
+    power = 31
+    minv = np.array([0.3, 1.4, -0.2, 0.15])  # a'·M⁻¹ entries: a narrow lobe tilted towards −x
+    inside = [[-0.5, -0.3, 1.0], [0.4, -0.3, 0.9], [-0.5, 0.5, 1.0]]
+    outside = [[-0.14, -0.3, 1.0], [0.26, -0.3, 1.0], [-0.14, 0.5, 1.0]]  # just beyond the cut
+    for corners, window in ((inside, True), (outside, False)):
+        c1, c2, c4 = (np.asarray(c, dtype=np.float64) for c in corners)
+        vertices = np.array([c1, c2, c2 + c4 - c1, c4]) @ ltc_fit.minv_matrix(minv).T
+        formula = ltc_fit.polygon_integral(vertices, power, weight)
+        quadrature = _area_quadrature(lambda w: ltc_fit.ltc_density(minv, w, power, weight), corners)
+        if window:
+            assert formula == pytest.approx(quadrature, rel=1e-4)
+        else:
+            cosine = _area_quadrature(lambda w: ltc_fit.ltc_density(minv, w), corners)
+            assert formula == pytest.approx((1.0 - weight) * ltc_fit.polygon_integral(vertices), rel=1e-12)
+            lost = quadrature - formula
+            assert 1e-7 < lost <= weight * ltc_fit.SUPPORT_MASS
+            assert cosine > 100 * lost  # the clamped cosine's tail is much heavier
+
+
+def test_mixture_fit_follows_a_sharp_phong_lobe_and_integrates_to_one():
+    """An un-normalised Phong lobe (e = 150, the area-light document's material) is Gaussian-like: the clamped
+    cosine misplaces 18 % of it (L1 0.35), the cos³¹ mixture a few per cent; the fitted densities stay
+    normalised (spherical lattice)."""
+    phong = Phong(kd=(0, 0, 0), ks=(1, 1, 1), exponent=150.0)
+    cosine = ltc_fit.fit_material(phong, 6)
+    mixture = ltc_fit.fit_material(phong, 6, ltc_fit.FitSettings(base_power=31))
+    assert cosine.base_power == 1 and mixture.base_power == 31 and mixture.meta["base_power"] == 31
+    assert np.median(cosine.error) > 0.3
+    assert np.median(mixture.error) < 0.06 and np.all(mixture.error[0, :-1] < 0.1)
+    assert np.all(mixture.power_weight[0, :-1] > 0.9)  # the cos³¹ lobe carries the fit
+    lattice = ltc_fit._fibonacci_sphere(1_000_000, 0.3)
+    for i in (0, 3):
+        density = ltc_fit.ltc_density(mixture.minv[0, i], lattice, 31, mixture.power_weight[0, i])
+        assert np.mean(density) * 4 * np.pi == pytest.approx(1.0, abs=3e-3)
+
+
+def test_base_power_must_be_odd_and_bounded():
+    for bad in (2, 0, ltc_fit.MAX_BASE_POWER + 2, 3.0):
+        with pytest.raises(reflets.RefletsError, match="odd integer"):
+            ltc_fit.glsl_defines((8, 8), base_power=bad)
 
 
 def test_fitted_ltc_of_lambert_is_the_identity_and_its_magnitude_the_albedo():
@@ -250,7 +351,7 @@ def test_fitted_ltc_distributions_integrate_to_one_and_magnitudes_to_the_albedo(
 def test_shipped_tables_carry_their_metadata_and_per_cell_errors(family):
     table = ltc_module.shipped_table(family)
     meta = table.meta
-    assert meta["version"] == ltc_fit.FORMAT_VERSION and meta["brdf"] == family
+    assert meta["version"] in ltc_fit.READABLE_VERSIONS and meta["brdf"] == family
     assert meta["size"] == list(table.size) == [64, 64]
     assert meta["theta_mapping"] == ltc_fit.THETA_MAPPING and meta["roughness_mapping"] == ltc_fit.ROUGHNESS_MAPPING
     assert meta["command"].startswith(f"reflets fit-ltc --brdf {family}")
@@ -262,6 +363,32 @@ def test_shipped_tables_carry_their_metadata_and_per_cell_errors(family):
     centres = (np.arange(64) + 0.5) / 64
     np.testing.assert_allclose(coords[..., 0], np.broadcast_to(centres[:-1], (64, 63)), atol=1e-9)
     np.testing.assert_allclose(coords[..., 1], np.broadcast_to(centres[:, None], (64, 63)), atol=1e-9)
+
+
+POWER_FAMILIES = ["phong", "blinn_phong", "beckmann", "ward"]
+
+
+@pytest.mark.parametrize("family", POWER_FAMILIES)
+def test_shipped_mixture_tables_fit_their_gaussian_like_lobes_better(family):
+    """The cos³¹ mixture tables of the Gaussian-like families: same axes as the clamped-cosine ones, their
+    command, and a much smaller median L1 error (the clamped cosine's floor on a Gaussian is 0.359)."""
+    table, cosine = ltc_module.shipped_table(family, "power"), ltc_module.shipped_table(family)
+    assert table.base_power == 31 and cosine.base_power == 1
+    assert table.meta["command"].startswith(f"reflets fit-ltc --brdf {family} --param base_power=31")
+    np.testing.assert_array_equal(table.alpha, cosine.alpha)
+    np.testing.assert_array_equal(table.cos_theta, cosine.cos_theta)
+    assert table.power_weight.shape == table.error.shape == (64, 64)
+    assert np.all((table.power_weight >= 0) & (table.power_weight <= 1))
+    assert np.median(table.error) < 0.5 * np.median(cosine.error)
+    sharp = table.alpha < 0.1  # where the lobes are Gaussian and the mixture carries the fit
+    assert np.median(table.error[sharp]) < 0.06 < 0.3 < np.median(cosine.error[sharp])
+    assert np.median(table.power_weight[sharp]) > 0.9
+
+
+def test_ggx_has_no_mixture_table():
+    """GGX's heavy tails are what the clamped cosine fits (a mixture fit keeps β < 1 %): base "power" reads
+    the clamped-cosine table."""
+    assert ltc_module.shipped_table("ggx", "power") is ltc_module.shipped_table("ggx")
 
 
 def test_ggx_fit_error_is_small():
@@ -320,6 +447,46 @@ def test_sphere_horizon_is_exact_without_clipping_and_close_with_it(ctx):
     sphere = reflets.render(scene, method="ltc", size=SIZE, horizon="sphere")
     assert np.abs(sphere - exact).max() > 1e-4  # some pixels do clip
     assert relative_mse(sphere, ref.image, mask) < 0.03
+
+
+def test_mixture_table_keeps_a_sharp_highlight_on_a_small_image(ctx):
+    """The fast lane's check of issue 18 (shipped tables, no fit): normalised Phong at α = 0.1 (e = 198) on the
+    benchmark scene at 60×45 against brute 64² — the largest error a few tenths of a per cent of the peak
+    with the cos³¹ mixture, over 7 % with the clamped cosine (0.6 % / 10.6 % measured at 200×150)."""
+    size = (60, 45)
+    scene = bench_scene({"type": "phong", "normalized": True, "exponent": 198.0}, size=size)
+    on_plane = plane_mask(scene, size)
+    exact = reflets.render(scene, method="brute", grid=64, size=size)
+    peak = exact[on_plane].max()
+    power, cosine = (reflets.render(scene, method="ltc", size=size, base=base)[on_plane] for base in ltc_module.BASES)
+    assert np.abs(power - exact[on_plane]).max() < 0.02 * peak
+    assert np.abs(cosine - exact[on_plane]).max() > 0.07 * peak
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("exponent", "max_error", "flip_bound"), [(150, 0.02, 0.1), (500, 0.02, 0.06)])
+def test_unnormalised_phong_highlight_keeps_its_edges(ctx, tmp_path, monkeypatch, exponent, max_error, flip_bound):
+    """Issue 18: the area-light document's un-normalised Phong on the benchmark scene, against a converged
+    brute 64² grid. The clamped cosine (base = "cosine") leaves the highlight's plateau ~10 % dark and spreads
+    its power-law tail over the plane (measured at this size: max error 11.2 / 9.7 % of the peak, FLIP 0.48 /
+    0.46); the cos³¹ mixture with its support cut-off: 0.49 / 0.67 %, FLIP 0.061 / 0.030."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))  # fitted at prepare, in both bases
+    scene = bench_scene({"type": "phong", "kd": [0, 0, 0], "ks": [1, 1, 1], "exponent": exponent})
+    mask = plane_mask(scene)
+    exact = reflets.render(scene, method="brute", grid=64, size=SIZE)
+    peak = exact[mask].max()
+    errors = {}
+    for base in ltc_module.BASES:
+        image = reflets.render(scene, method="ltc", size=SIZE, base=base)
+        on_plane = mask[..., None]
+        errors[base] = (
+            np.abs(image - exact)[mask].max() / peak,
+            flip(np.where(on_plane, image, 0), np.where(on_plane, exact, 0)),
+        )
+    assert errors["power"][0] < max_error and errors["power"][1] < flip_bound, errors
+    assert errors["cosine"][0] > 0.07 and errors["cosine"][1] > 0.3, errors  # what the issue measured
+    sphere = ltc_module.Ltc(ctx, horizon="sphere")  # the sphere horizon takes the clamped cosine only
+    assert sphere._choice(scene.materials["floor"]).table.base_power == 1
 
 
 TRIANGLE = {"type": "polygon", "vertices": [[1.2, 0.8, -0.2], [0.6, 0.8, 0.9], [1.6, 0.8, 0.5]], "radiance": [2, 3, 4]}
@@ -393,8 +560,11 @@ def test_materials_choose_shipped_tables_or_a_fitted_one(tmp_path, monkeypatch):
     phong = choose(Phong(normalized=True, exponent=150.0, ks=(0.3, 0.3, 0.3)))
     assert phong.source == "phong" and phong.scale == (0.3, 0.3, 0.3)
     assert choose(Lambert()).table is None
+    assert choose(Phong(normalized=True, exponent=150.0)).table.base_power == 31  # phong_power.npz
+    assert choose(Phong(normalized=True, exponent=150.0), "cosine").table.base_power == 1
     fitted = choose(Microfacet(alpha=0.3, fresnel="schlick", specular=(0.04, 0.04, 0.04)))
     assert fitted.source == "material" and fitted.table.size == (ltc_module.INSTANCE_SIZE, 1)
+    assert fitted.table.base_power == 1  # the mixture went unused: the clamped-cosine fit was kept
     assert len(list((tmp_path / "reflets" / "ltc").glob("*.npz"))) == 1
     ltc_module.TABLES.clear_memory()  # a new process: read back from disk, no refit
     monkeypatch.setattr(ltc_fit, "fit_material", lambda *a, **k: pytest.fail("refitted a cached table"))

@@ -18,6 +18,55 @@ from the material:
   exact material (~1 s), cached in memory and in ``$XDG_CACHE_HOME/reflets/ltc`` (default ``~/.cache``) under
   a hash of the material's parameters (and, for a measured file, its size and modification time).
 
+**Base distribution** (``base``). Heitz et al. transform the clamped cosine z/π. Seen through M it falls off
+as a power law (∝ ψ⁻⁴ at an angle ψ from its axis), while Phong's cos^e ψ ≈ exp(−e ψ²/2), Beckmann's and
+Ward's lobes fall off like Gaussians: the best clamped-cosine fit of such a lobe misplaces 18 % of it (L1
+0.359), which leaves a highlight's plateau ~10 % too dark and spreads its tail over the dark plane around it.
+``base = "power"`` (default) transforms the mixture (1 − β) z/π + β (n + 1)/(2π) zⁿ, n = 31, β fitted per
+table cell with M (stored in the magnitude texture's alpha): cosⁿ seen through M is nearly Gaussian. Its
+polygon integral stays closed-form — Arvo's (1995) recurrence of axial moments adds (n − 1)/2 = 15 steps per
+edge —, and where the whole transformed polygon lies outside the cone that holds all but 10⁻⁴ of the cosⁿ lobe
+(z < 10^(−4/32) = 0.75) the cosⁿ part is cut to 0 instead of fading as a power law. The family tables
+``phong_power.npz``, ``blinn_phong_power.npz``, ``beckmann_power.npz`` and ``ward_power.npz`` hold the
+mixture; GGX has none (its fitted β stays below 1 %: the clamped cosine is its shape) and reads ``ggx.npz``;
+one-material tables fit the mixture and keep the clamped-cosine fit when no cell uses it. ``base = "cosine"``
+is Heitz et al.'s LTC, the tables of before; ``horizon = "sphere"`` always takes it (its closed form is the
+clamped cosine's).
+
+Measured (issue 18) on the area-light document's scene of ``reflets bench arealights`` (light at height 1,
+200×150), by ``python tools/bench_arealights_part.py OUT`` — the ``ltc``, ``ltc base=cosine`` and brute 8² rows
+of the suite, same reference and metrics; max error = the largest |error| on the plane as a fraction of the
+peak, against brute 64² (converged; the 256-spp reference's own noise reaches 4 % of the peak); FLIP and
+relative MSE against the reference. Each cell: max error / FLIP / relative MSE.
+
+| material | base = "power" (default) | base = "cosine" (Heitz et al.) | brute 8² |
+|---|---|---|---|
+| Phong e = 150, un-normalised | 0.51 % / 0.064 / 3.7e-5 | 11.35 % / 0.442 / 5.2e-4 | 1.90 % / 0.040 / 5.2e-5 |
+| Phong e = 200, un-normalised | 0.61 % / 0.054 / 2.2e-5 | 10.72 % / 0.459 / 3.5e-4 | 2.58 % / 0.039 / 3.8e-5 |
+| Phong e = 500, un-normalised | 0.70 % / 0.029 / 3.6e-6 | 9.89 % / 0.422 / 6.4e-5 | 8.96 % / 0.030 / 2.2e-5 |
+| Beckmann α = 0.1 | 0.73 % / 0.088 / 1.3e-3 | 13.84 % / 0.438 / 8.7e-2 | 1.07 % / 0.045 / 1.1e-3 |
+| Phong normalised, α = 0.1 (e = 198) | 0.57 % / 0.072 / 9.4e-4 | 10.63 % / 0.458 / 5.2e-2 | 2.63 % / 0.046 / 1.3e-3 |
+| Blinn-Phong normalised, α = 0.1 | 0.62 % / 0.086 / 7.3e-4 | 13.40 % / 0.440 / 2.4e-2 | 1.12 % / 0.044 / 7.1e-4 |
+| Ward (duer) α = 0.1 | 0.74 % / 0.088 / 1.3e-3 | 13.82 % / 0.439 / 8.4e-2 | 1.08 % / 0.045 / 1.1e-3 |
+| the four at α = 0.3 | 0.17–1.63 % / 0.21–0.26 / 5e-4–2e-3 | 8.0–11.9 % / 0.33–0.38 / 0.01–0.05 | ≤ 0.53 % / ≤ 0.042 |
+| GGX α = 0.1 / 0.3 / 0.6 | the same table in both bases: 0.76 / 3.77 / 2.50 % | | |
+
+Where the clamped cosine's error came from (same scene, Phong e = 150): not the table's θ sampling — the
+one-material table fitted with 128 view angles instead of 32 has the same per-cell L1 error (median 0.354,
+``reflets fit-ltc --brdf phong --param exponent=150 --param normalized=false --param "kd=[0,0,0]" --size 128``)
+and renders the same image —, not the optimiser — 0.354 (0.359 at e = 500) is the clamped cosine's floor on a
+Gaussian —, but the shape: the largest error is the highlight's plateau coming out too dark, the plane just
+outside its rim comes out too bright, and the power-law tail lights the plane where the exact image is 0.
+That tail is most of the FLIP: HDR-FLIP's exposure range runs up to the image's median, which is 0 here, so
+light where there should be none is seen. The mixture fit reaches a median L1 of 0.022 (0.027 at e = 500; the
+same command with ``--param base_power=31``) and the support cut-off removes the tail. At mid roughness
+(α ≈ 0.3) the families gain less FLIP: a mixture of the powers 1 and 31 has no intermediate shape, and the
+few per cent of clamped cosine left in those cells' fits still glow over the dark plane. Cost: (n − 1)/2 = 15
+more recurrence steps per polygon edge. On llvmpipe the mixture shader ran no slower than the clamped-cosine
+one in every interleaved measurement of this session (Phong e = 500 at 800×600 in the run above: 54 ms
+against 77 ms); the host was shared, and this session's llvmpipe ran every ltc frame many times slower than the
+committed runs (the unchanged shader of before too), so these times compare only with each other.
+
 A Lambertian term (``kd`` / ``diffuse`` / ``albedo``) is split off and integrated exactly (identity matrix);
 the table fits the rest of the BRDF. Ashikhmin–Shirley's coupled diffuse term and measured data are not
 Lambertian and stay in the fitted lobe (one LTC for the whole BRDF). A coloured lobe (conductor Fresnel,
@@ -28,14 +77,15 @@ edge sum makes a two-sided light right from either side. The unoccluded integral
 shadows: the soft-shadow ratio, docs/techniques/shadows.md); compare unoccluded scenes with
 ``reflets.reference(..., visibility=False)``.
 
-Accuracy (benchmark scene of tests/arealights/test_ltc.py, relative MSE against the unoccluded reference;
-more in data/ltc/README.md): GGX α = 0.1 / 0.3 / 0.6: 0.02 / 0.11 / 0.04 %; normalised Phong e = 150: 0.9 %;
-Beckmann, Blinn-Phong, Ward, Lafortune at similar widths 1.2–1.3 % (their Gaussian-like lobes come out ~5 %
-too dark: the LTC's tails are heavier); Ashikhmin–Shirley 2.8 %; anisotropic GGX (0.1, 0.4): 23 % — the
-isotropic approximation fails for strongly anisotropic lobes.
+Accuracy with ``base = "cosine"`` (benchmark scene of tests/arealights/test_ltc.py, relative MSE against the
+unoccluded reference; more in data/ltc/README.md): GGX α = 0.1 / 0.3 / 0.6: 0.02 / 0.11 / 0.04 %; normalised
+Phong e = 150: 0.9 %; Beckmann, Blinn-Phong, Ward, Lafortune at similar widths 1.2–1.3 % (their Gaussian-like
+lobes come out ~5 % too dark: the LTC's tails are heavier — what the mixture base fixes); Ashikhmin–Shirley
+2.8 %; anisotropic GGX (0.1, 0.4): 23 % — the isotropic approximation fails for strongly anisotropic lobes.
 
 Cost (shader ltc.glsl): per fragment two bilinear fetches and a 3×3 transform; per light and polygon vertex
-a transform and a normalisation; per edge one clipped edge term — horizon clipping is done edge by edge
+a transform and a normalisation; per edge one clipped edge term (with a mixture table, plus 15 recurrence
+steps and the edge's highest point for the support test) — horizon clipping is done edge by edge
 without building the clipped polygon (no local arrays, no data-dependent branches: a software rasteriser
 runs both sides of every branch), and the edge term θ/sinθ comes from a rational fit instead of acos/atan.
 The light records (the light buffer's layout, ``polygon_record``) are also uploaded as a uniform array for
@@ -46,7 +96,8 @@ Benchmark scene at 800×600 on llvmpipe (2 cores), one quad light, GGX α = 0.3 
 interleaved rounds): 4.7 ms per two-thread frame against 3.5 ms for ``forward`` with one point light (1.36×);
 where the time goes is in that report (``profile`` parameter: the shader with one stage dropped).
 ``horizon = "sphere"`` trades exact clipping for production engines' clipped-sphere approximation (faster,
-exact where the transformed polygon stays above the horizon; accuracy in the same report).
+exact where the transformed polygon stays above the horizon; accuracy in the same report, with the
+clamped-cosine tables it takes).
 """
 
 from __future__ import annotations
@@ -68,7 +119,16 @@ from . import ltc_fit
 from .base import AREA_PROGRAM, POLY_STRIDE, SHADERS, AreaLightParams, AreaLightTechnique
 from .ltc_fit import FAMILIES, LtcTable
 
-LTC_FLAGS = {"LTC_SIZE_THETA", "LTC_SIZE_ROUGH", "LTC_EDGE_P", "LTC_EDGE_Q", "LTC_DIFFUSE", "LTC_LOBE"}
+LTC_FLAGS = {
+    "LTC_SIZE_THETA",
+    "LTC_SIZE_ROUGH",
+    "LTC_EDGE_P",
+    "LTC_EDGE_Q",
+    "LTC_DIFFUSE",
+    "LTC_LOBE",
+    "LTC_POWER",
+    "LTC_CUT",
+}
 LTC_PROGRAM = ProgramSpec(
     "arealight_ltc",
     vertex=AREA_PROGRAM.vertex,
@@ -77,15 +137,28 @@ LTC_PROGRAM = ProgramSpec(
 )
 #: θ entries of the one-material tables fitted at prepare time
 INSTANCE_SIZE = 32
+#: the cosine power of the mixture base (base = "power") for the one-material tables
+INSTANCE_BASE_POWER = 31
+#: the lobe's base distribution: "power" (the clamped cosine mixed with cosⁿ per cell, the default) or
+#: "cosine" (the clamped cosine alone, Heitz et al.'s LTC)
+BASES = ("power", "cosine")
 #: scenes with up to this many polygon lights also get their records as a uniform array (faster to read on
 #: llvmpipe than the light buffer); more lights read the buffer
 UNIFORM_LIGHTS = 16
 
 
+def shipped_table(family: str, base: str = "cosine") -> LtcTable:
+    """The table shipped for a family: ``reflets/data/ltc/<family>.npz`` (the clamped cosine), or with base
+    "power" ``<family>_power.npz`` where the mixture fits the family better (else the clamped-cosine one)."""
+    power = f"{family}_power.npz"
+    if base == "power" and resources.files("reflets").joinpath("data", "ltc", power).is_file():
+        return _shipped_file(power)
+    return _shipped_file(f"{family}.npz")
+
+
 @functools.cache
-def shipped_table(family: str) -> LtcTable:
-    """The table shipped for a family (``reflets/data/ltc/<family>.npz``)."""
-    with resources.files("reflets").joinpath("data", "ltc", f"{family}.npz").open("rb") as fh:
+def _shipped_file(name: str) -> LtcTable:
+    with resources.files("reflets").joinpath("data", "ltc", name).open("rb") as fh:
         return LtcTable.load(fh)
 
 
@@ -112,7 +185,7 @@ def _family_of(lobe) -> str | None:
     return None
 
 
-def choose_table(material) -> LtcChoice:
+def choose_table(material, base: str = "power") -> LtcChoice:
     """The table, roughness coordinate and factors for a material (rules in the module docstring)."""
     diffuse, lobe = material.lambertian_split()  # the Lambertian part is integrated exactly
     if lobe is None:
@@ -121,10 +194,11 @@ def choose_table(material) -> LtcChoice:
     if family is not None:
         spec = FAMILIES[family]
         scale = lobe.specular if lobe.type == "microfacet" else lobe.ks
-        table = shipped_table(family)
+        table = shipped_table(family, base)
         r = float(ltc_fit.roughness_coordinate(spec.alpha(lobe), table.meta["alpha_min"]))
         return LtcChoice(table, r, tuple(float(c) for c in scale), diffuse, family)
-    return LtcChoice(fitted_table(lobe), 0.0, (1.0, 1.0, 1.0), diffuse, "material")
+    base_power = INSTANCE_BASE_POWER if base == "power" else 1
+    return LtcChoice(fitted_table(lobe, base_power=base_power), 0.0, (1.0, 1.0, 1.0), diffuse, "material")
 
 
 # ------------------------------------------------------------------------------ one-material tables
@@ -138,23 +212,26 @@ def _fitter_hash() -> str:
     return source_hash(Path(ltc_fit.__file__))
 
 
-def material_key(material, n_theta: int = INSTANCE_SIZE) -> str:
+def material_key(material, n_theta: int = INSTANCE_SIZE, base_power: int = 1) -> str:
     """Hash of everything a one-material table depends on (the fitter's source included: a changed fitter
     refits)."""
     data = {
         "material": material.model_dump(mode="json"),
         "fitter": _fitter_hash(),
         "n_theta": n_theta,
-        "settings": ltc_fit.FitSettings().__dict__,
+        "settings": ltc_fit.FitSettings(base_power=base_power).__dict__,
     }
     if material.type == "measured":
         data["file_stat"] = file_stamp(material.file)
     return content_key(data)
 
 
-def fitted_table(material, n_theta: int = INSTANCE_SIZE) -> LtcTable:
+def fitted_table(material, n_theta: int = INSTANCE_SIZE, base_power: int = 1) -> LtcTable:
     """The one-material table of ``material`` (memory cache, then disk cache, then a fit)."""
-    return TABLES.get(material_key(material, n_theta), lambda: ltc_fit.fit_material(material, n_theta))
+    settings = ltc_fit.FitSettings(base_power=base_power)
+    return TABLES.get(
+        material_key(material, n_theta, base_power), lambda: ltc_fit.fit_material(material, n_theta, settings)
+    )
 
 
 # ------------------------------------------------------------------------------ the technique
@@ -169,6 +246,12 @@ HORIZONS = ("exact", "sphere")
 class LtcParams(AreaLightParams):
     """Parameters of ``ltc``."""
 
+    base: Literal[BASES] = Field(
+        "power",
+        description="the lobe's base distribution: power (the clamped cosine mixed with cos^n per table cell: "
+        "sharp highlights without the clamped cosine's heavy tails) or cosine (the clamped cosine alone, as in "
+        "Heitz et al. 2016); horizon = sphere always uses cosine",
+    )
     horizon: Literal[HORIZONS] = Field(
         "exact",
         description="horizon clipping: exact (edge by edge) or sphere (the cap with the polygon's vector form "
@@ -196,7 +279,8 @@ class Ltc(AreaLightTechnique):
         cache = self.__dict__.setdefault("_choices", {})
         key = material.model_dump_json()
         if key not in cache:
-            cache[key] = choose_table(material)
+            # the sphere horizon's closed form holds for the clamped cosine only
+            cache[key] = choose_table(material, "cosine" if self.params.horizon == "sphere" else self.params.base)
         return cache[key]
 
     def flags(self, material) -> dict[str, object]:
@@ -210,6 +294,7 @@ class Ltc(AreaLightTechnique):
             lobe=choice.table is not None,
             uniform_lights=len(rows) // POLY_STRIDE if self._lights_in_uniforms() else 0,
             vertices=counts.pop() if len(counts) == 1 else 0,
+            base_power=choice.table.base_power if choice.table is not None else 1,
         )
         profile = PROFILE_STAGES.index(self.params.profile)
         horizon = HORIZONS.index(self.params.horizon)
@@ -250,7 +335,7 @@ class Ltc(AreaLightTechnique):
             return uploaded[key]
         textures = {}
         size = table.size
-        magnitude = np.concatenate([table.magnitude, np.zeros(table.magnitude.shape[:2] + (1,), np.float32)], axis=-1)
+        magnitude = np.concatenate([table.magnitude, table.power_weight[..., None]], axis=-1)  # alpha: β
         for name, data in (("a_ltc_minv", table.minv), ("a_ltc_magnitude", magnitude)):  # RGBA: faster than RGB
             data = np.ascontiguousarray(data, dtype=np.float32)
             tex = self.ctx.texture(size, data.shape[-1], data.tobytes(), dtype="f4")

@@ -15,6 +15,16 @@ albedo). The lobe of an isotropic BRDF is symmetric about the plane of incidence
 and is optimised as (log a', log c, b, d) with a' = a − b·d = det of the xz block (> 0, so det M > 0: M
 keeps orientations and M⁻¹ never flips a vertex to its antipode).
 
+Mixture base (``FitSettings.base_power`` n > 1, odd): D_o = (1 − β) max(0, z)/π + β (n + 1)/(2π) max(0, z)ⁿ,
+β ∈ (0, 1) a fifth parameter per cell (optimised as its logit, stored in ``power_weight``). The clamped
+cosine seen through M falls off as a power law, ∝ ψ⁻⁴ at an angle ψ from its axis, so a Gaussian-like lobe
+(Phong's cos^e ψ ≈ exp(−e ψ²/2), Beckmann, Ward) is fitted no better than L1 0.359: its plateau too low, its
+tails too heavy. cosⁿ seen through diag(s, s, 1) is (1 + tan²ψ/s²)^(−(n+3)/2) — a Gaussian as n grows — and
+its polygon integral stays closed-form for odd n (Arvo 1995, :func:`polygon_integral`). With n = 31 the
+sharp lobes reach L1 ≈ 0.03; GGX's heavy tails keep β < 1 % (the clamped cosine is their shape). The
+renderer also cuts the cosⁿ lobe off outside the cone z ≥ :func:`support_cut` (all but ``SUPPORT_MASS`` of
+its mass), where it still fades as a power law; the fit ignores that cut (≤ 10⁻⁴ of the lobe).
+
 Fit
 ---
 Per table cell, a fixed set of directions: k×k stratified samples of the BRDF's own importance sampling
@@ -57,9 +67,11 @@ File format (``.npz``, written by :meth:`LtcTable.save`):
   (m00 = 1 and the zero entries are implied);
 - ``magnitude`` float32 (n_rough, n_theta, 3): ∫ f cos dω per RGB channel;
 - ``error`` float32 (n_rough, n_theta): the L1 fit error of each cell (above);
+- ``power_weight`` float32 (n_rough, n_theta): the mixture weight β of each cell (0 with the clamped cosine;
+  format version 2 — version 1 files, without it, are read as clamped-cosine tables);
 - ``cos_theta`` float64 (n_theta,), ``alpha`` float64 (n_rough,): the axes' values;
 - ``meta``: a JSON string — format version, brdf type and parameters, table size, axis mappings,
-  objective, sample counts, fit time, error summary.
+  ``base_power`` (1: the clamped cosine), objective, sample counts, fit time, error summary.
 """
 
 from __future__ import annotations
@@ -67,7 +79,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -75,7 +87,15 @@ import numpy as np
 from ..brdf import MATERIALS, Material
 from ..errors import ArgumentError
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: versions :meth:`LtcTable.load` reads (version 1: the clamped cosine only, no ``power_weight``)
+READABLE_VERSIONS = (1, 2)
+#: the largest cosine power of a mixture base (the shader unrolls (n − 1)/2 recurrence steps per edge)
+MAX_BASE_POWER = 63
+#: the mass of the cosⁿ lobe outside its support cone (ltc.glsl's window): the cone is z ≥ SUPPORT_MASS^(1/(n+1))
+SUPPORT_MASS = 1e-4
+#: a mixture fit whose weights β all stay below this is replaced by the clamped-cosine fit (one-material tables)
+MIN_POWER_WEIGHT = 0.01
 #: name of the view-angle axis mapping (``ltc.glsl`` implements this one)
 THETA_MAPPING = "sqrt(1-cos(theta))"
 #: name of the roughness axis mapping
@@ -196,20 +216,36 @@ def minv_matrix(minv: np.ndarray) -> np.ndarray:
     return m
 
 
-def ltc_density(minv: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """D(ω) for stored inverse entries ``minv`` (..., 4) at unit directions ``w`` (..., 3), broadcasting."""
+def sigmoid(q) -> np.ndarray:
+    """The weight of the cosine power in a mixture, β = 1/(1 + e^−q) ∈ (0, 1), from the fit's free parameter q."""
+    return 1.0 / (1.0 + np.exp(-np.asarray(q, dtype=np.float64)))
+
+
+def ltc_density(minv: np.ndarray, w: np.ndarray, base_power: int = 1, weight=0.0) -> np.ndarray:
+    """D(ω) for stored inverse entries ``minv`` (..., 4) at unit directions ``w`` (..., 3), broadcasting; with
+    ``base_power`` n > 1 the base is the mixture (1 − β) clamped cosine + β cosⁿ, β = ``weight``."""
     minv = np.asarray(minv, dtype=np.float64)
     m02, m11, m20, m22 = (minv[..., k] for k in range(4))
     vx = w[..., 0] + m02 * w[..., 2]
     vy = m11 * w[..., 1]
     vz = m20 * w[..., 0] + m22 * w[..., 2]
-    det = m11 * (m22 - m02 * m20)
-    len2 = vx * vx + vy * vy + vz * vz
-    return det * np.maximum(vz, 0.0) / (np.pi * len2 * len2)
+    return _mixture(m11 * (m22 - m02 * m20), vx * vx + vy * vy + vz * vz, vz, base_power, weight)
 
 
-def _density(p: np.ndarray, wx: np.ndarray, wy: np.ndarray, wz: np.ndarray) -> np.ndarray:
-    """D for parameters p (B, K, 4) at directions with components wx, wy, wz (B, S) → (B, K, S)."""
+def _mixture(det, len2, vz, base_power: int, weight):
+    """det(M⁻¹) · D_o(v/|v|) / |v|³ for v = M⁻¹ω: the clamped cosine z/π, or with ``base_power`` n > 1 the
+    mixture (1 − β) z/π + β (n + 1)/(2π) zⁿ (both densities on the hemisphere; β = ``weight``)."""
+    cosine = det * np.maximum(vz, 0.0) / (np.pi * len2 * len2)
+    if base_power == 1:
+        return cosine
+    z = np.maximum(vz, 0.0) / np.sqrt(len2)
+    power = det * (0.5 * (base_power + 1) / np.pi) * z**base_power / (len2 * np.sqrt(len2))
+    return cosine + weight * (power - cosine)
+
+
+def _density(p: np.ndarray, wx: np.ndarray, wy: np.ndarray, wz: np.ndarray, base_power: int = 1) -> np.ndarray:
+    """D for parameters p (B, K, 4 or 5) at directions with components wx, wy, wz (B, S) → (B, K, S); the fifth
+    parameter, with ``base_power`` > 1, is the mixture weight's logit q."""
     ap, c = np.exp(p[..., 0])[..., None], np.exp(p[..., 1])[..., None]
     b, d = p[..., 2][..., None], p[..., 3][..., None]
     wx, wy, wz = wx[:, None], wy[:, None], wz[:, None]
@@ -217,12 +253,14 @@ def _density(p: np.ndarray, wx: np.ndarray, wy: np.ndarray, wz: np.ndarray) -> n
     vy = (ap / c) * wy
     vz = (ap + b * d) * wz - d * wx
     len2 = vx * vx + vy * vy + vz * vz
-    return ((ap * ap / (np.pi * c)) * np.maximum(vz, 0.0)) / (len2 * len2)
+    if base_power == 1:
+        return ((ap * ap / (np.pi * c)) * np.maximum(vz, 0.0)) / (len2 * len2)
+    return _mixture(ap * ap / c, len2, vz, base_power, sigmoid(p[..., 4])[..., None])
 
 
-def _density_from_params(p: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """D for parameters p (B, K, 4) at directions w (B, S, 3) → (B, K, S)."""
-    return _density(p, w[..., 0], w[..., 1], w[..., 2])
+def _density_from_params(p: np.ndarray, w: np.ndarray, base_power: int = 1) -> np.ndarray:
+    """D for parameters p (B, K, 4 or 5) at directions w (B, S, 3) → (B, K, S)."""
+    return _density(p, w[..., 0], w[..., 1], w[..., 2], base_power)
 
 
 # ------------------------------------------------------------------------------ the edge integral's θ/sinθ
@@ -240,6 +278,72 @@ def theta_over_sin(x) -> np.ndarray:
     y = np.abs(x)
     r = (EDGE_P[0] + y * (EDGE_P[1] + y * EDGE_P[2])) / (1.0 + y * (EDGE_Q[0] + y * EDGE_Q[1]))
     return np.where(x >= 0.0, r, np.pi / np.sqrt(np.maximum(1.0 - x * x, 1e-7)) - r)
+
+
+def support_cut(base_power: int, mass: float | None = None) -> float:
+    """cos of the cone about the base's axis holding all but ``mass`` (default SUPPORT_MASS) of the cosⁿ lobe:
+    ∫_{z < t} (n + 1)/(2π) zⁿ dω = t^(n+1). 0 for the clamped cosine (no cut)."""
+    return 0.0 if base_power == 1 else float((SUPPORT_MASS if mass is None else mass) ** (1.0 / (base_power + 1)))
+
+
+def power_edge_sum(a: np.ndarray, b: np.ndarray, base_power: int) -> tuple[float, float]:
+    """(Σ_{k = 2, 4, …, n − 1} J_k, highest z) of the arc a → b (unit vectors, float64): J_k = ∫ h(s)^k ds along
+    the arc, h = its z coordinate, by the recurrence J_k = ((k − 1) C² J_{k−2} − [h^{k−1} h']_a^b)/k, J_0 = θ
+    (ltc.glsl's ``ltc_power_sum``; the edge's cosⁿ term is its clamped-cosine term × (1 + the sum / θ))."""
+    c = np.cross(a, b)
+    sin_theta = float(np.linalg.norm(c))
+    if sin_theta < 1e-15:
+        return 0.0, max(a[2], b[2])
+    cos_theta = float(a @ b)
+    j = math.atan2(sin_theta, cos_theta)
+    slope_a = (b[2] - cos_theta * a[2]) / sin_theta  # h'(0), h'(θ): the arc's z slope at its ends
+    slope_b = (b[2] * cos_theta - a[2]) / sin_theta
+    c2 = a[2] * a[2] + slope_a * slope_a
+    top = math.sqrt(c2) if slope_a > 0.0 and slope_b < 0.0 else max(a[2], b[2])
+    total = 0.0
+    for k in range(2, base_power, 2):
+        j = ((k - 1) * c2 * j - (b[2] ** (k - 1) * slope_b - a[2] ** (k - 1) * slope_a)) / k
+        total += j
+    return total, top
+
+
+def polygon_integral(vertices: np.ndarray, base_power: int = 1, weight: float = 0.0) -> float:
+    """∫ D_o dω over a polygon (vertices (m, 3), not necessarily unit) clipped to z ≥ 0, D_o the clamped cosine
+    z/π or the mixture (1 − β) z/π + β W (n + 1)/(2π) zⁿ (β = ``weight``, W the support window): the float64
+    twin of ``ltc_polygon_integral`` in ltc.glsl (Sutherland–Hodgman clipping, exact angles).
+
+    For odd n Arvo's (1995) recurrence of the axial moments ∫_P zᵏ collapses to (n + 1)/(2π) ∫_P zⁿ =
+    (1/2π) Σ_edges Γ_z Σ_{k even < n} J_k, Γ_z the z component of the edge plane's unit normal. W is 0 when the
+    polygon lies wholly outside the cone z ≥ :func:`support_cut` (no point of it above the cut, the pole
+    outside), else 1."""
+    clipped = []
+    for k in range(len(vertices)):
+        a, b = vertices[k], vertices[(k + 1) % len(vertices)]
+        if a[2] >= 0:
+            clipped.append(a)
+        if (a[2] >= 0) != (b[2] >= 0):
+            clipped.append(a + (b - a) * (a[2] / (a[2] - b[2])))
+    if len(clipped) < 3:
+        return 0.0
+    u = np.array(clipped, dtype=np.float64)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    cosine, excess, top, normals_z = 0.0, 0.0, 0.0, []
+    for k in range(len(u)):
+        a, b = u[k], u[(k + 1) % len(u)]
+        c = np.cross(a, b)
+        sin_theta = float(np.linalg.norm(c))
+        if sin_theta > 1e-15:
+            cosine += math.atan2(sin_theta, float(a @ b)) * c[2] / sin_theta
+            normals_z.append(c[2])
+        if base_power > 1:
+            extra, arc_top = power_edge_sum(a, b, base_power)
+            excess += extra * c[2] / max(sin_theta, 1e-15)
+            top = max(top, arc_top)
+    if base_power == 1 or weight == 0.0:
+        return abs(cosine) / (2.0 * np.pi)
+    pole_inside = min(normals_z) >= 0.0 or max(normals_z) <= 0.0
+    window = weight if pole_inside or top >= support_cut(base_power) else 0.0
+    return abs((1.0 - weight) * cosine + window * (cosine + excess)) / (2.0 * np.pi)
 
 
 def fit_theta_over_sin(samples: int = 20001, rounds: int = 60) -> tuple[np.ndarray, np.ndarray, float]:
@@ -266,13 +370,20 @@ def fit_theta_over_sin(samples: int = 20001, rounds: int = 60) -> tuple[np.ndarr
 
 
 def glsl_defines(
-    size: tuple[int, int], diffuse: bool = True, lobe: bool = True, uniform_lights: int = 0, vertices: int = 0
+    size: tuple[int, int],
+    diffuse: bool = True,
+    lobe: bool = True,
+    uniform_lights: int = 0,
+    vertices: int = 0,
+    base_power: int = 1,
 ) -> dict[str, str | int]:
     """The ``#define``s ltc.glsl needs: the table's ``size`` = (n_theta, n_rough), the edge-integral
     coefficients, whether the material has a Lambertian term and a fitted lobe, the capacity of the uniform
-    copy of the light records (0: read the light buffer) and the vertex count shared by every polygon light
-    (0: read each light's)."""
+    copy of the light records (0: read the light buffer), the vertex count shared by every polygon light
+    (0: read each light's) and the table's base power."""
     return {
+        "LTC_POWER": _check_base_power(base_power),
+        "LTC_CUT": f"{support_cut(base_power):.8g}",
         "LTC_SIZE_THETA": int(size[0]),
         "LTC_SIZE_ROUGH": int(size[1]),
         "LTC_EDGE_P": "vec3({:.8g}, {:.8g}, {:.8g})".format(*EDGE_P),
@@ -411,7 +522,7 @@ def hemisphere_quadrature(axis: np.ndarray, width: np.ndarray, n: int):
     return w.reshape(len(axis), -1, 3), weight.reshape(len(axis), -1)
 
 
-def _check(materials: list[Material], cos_theta: float, axis, width, params, n: int):
+def _check(materials: list[Material], cos_theta: float, axis, width, params, n: int, base_power: int = 1):
     """Magnitude (B, 3) and L1 error (B,) of fitted cells by :func:`hemisphere_quadrature`. The error is
     computed as ∫|D − p| = ∫D + ∫p − 2∫min(D, p) = 2 − 2∫min(D, p) (both integrate to 1: D exactly, p by its
     normalisation on the same nodes), which needs the quadrature to be accurate only where the lobe is — an
@@ -430,7 +541,7 @@ def _check(materials: list[Material], cos_theta: float, axis, width, params, n: 
     magnitude = np.einsum("bs,bsc->bc", weight, fcos)
     lum = magnitude @ LUMINANCE
     p = (fcos @ LUMINANCE) / np.where(lum > 0, lum, 1.0)[:, None]
-    d = _density_from_params(params[:, None, :], w)[:, 0]
+    d = _density_from_params(params[:, None, :], w, base_power)[:, 0]
     error = 2.0 - 2.0 * np.einsum("bs,bs->b", weight, np.minimum(d, p))
     return magnitude, np.where(lum > 0, np.clip(error, 0.0, 2.0), 0.0)
 
@@ -504,12 +615,22 @@ class LtcTable:
     cos_theta: np.ndarray
     alpha: np.ndarray
     meta: dict = field(default_factory=dict)
+    #: the mixture weight β of each cell (zeros for a clamped-cosine table)
+    power_weight: np.ndarray | None = None
 
     def __post_init__(self):
         # float32 as in the file and on the GPU, so a table in memory equals the one read back from disk
         self.minv = np.asarray(self.minv, dtype=np.float32)
         self.magnitude = np.asarray(self.magnitude, dtype=np.float32)
         self.error = np.asarray(self.error, dtype=np.float32)
+        if self.power_weight is None:
+            self.power_weight = np.zeros(self.error.shape)
+        self.power_weight = np.asarray(self.power_weight, dtype=np.float32)
+
+    @property
+    def base_power(self) -> int:
+        """n of the base distribution (1: the clamped cosine; n > 1: the mixture with cosⁿ)."""
+        return int(self.meta.get("base_power", 1))
 
     @property
     def size(self) -> tuple[int, int]:
@@ -527,6 +648,7 @@ class LtcTable:
                 minv=self.minv,
                 magnitude=self.magnitude,
                 error=self.error,
+                power_weight=self.power_weight,
                 cos_theta=self.cos_theta,
                 alpha=self.alpha,
                 meta=np.array(json.dumps(self.meta)),
@@ -537,10 +659,10 @@ class LtcTable:
         """Read a table written by :meth:`save` (a path or a file object); checks the format version."""
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
-            if meta.get("version") != FORMAT_VERSION or meta.get("theta_mapping") != THETA_MAPPING:
+            if meta.get("version") not in READABLE_VERSIONS or meta.get("theta_mapping") != THETA_MAPPING:
                 raise ArgumentError(
                     f"LTC table {path}: format {meta.get('version')} / {meta.get('theta_mapping')}, this reflets reads "
-                    f"{FORMAT_VERSION} / {THETA_MAPPING}; refit it with `reflets fit-ltc`",
+                    f"{' or '.join(map(str, READABLE_VERSIONS))} / {THETA_MAPPING}; refit it with `reflets fit-ltc`",
                     field="table",
                 )
             table = cls(
@@ -550,8 +672,10 @@ class LtcTable:
                 cos_theta=data["cos_theta"],
                 alpha=data["alpha"],
                 meta=meta,
+                power_weight=data["power_weight"] if "power_weight" in data.files else None,
             )
-        if table.minv.shape[:2] != table.magnitude.shape[:2] or table.minv.shape[:2] != table.error.shape:
+        shapes = {table.minv.shape[:2], table.magnitude.shape[:2], table.error.shape, table.power_weight.shape}
+        if len(shapes) > 1:
             raise ArgumentError(f"LTC table {path}: inconsistent array shapes", field="table")
         return table
 
@@ -566,24 +690,34 @@ class FitSettings:
     max_iter: int = 400
     ftol: float = 1e-6
     power: int = 1  #: the objective is Σ w |D − p|^power
+    #: the base distribution: 1 the clamped cosine (Heitz et al.), odd n > 1 the mixture (1 − β) cos + β cosⁿ
+    base_power: int = 1
 
 
-def _isotropic_start(objective, idx: np.ndarray, tilt: np.ndarray) -> np.ndarray:
-    """Starting points (len(idx), 4): the best of 60 isotropic widths a' = c ∈ [1e-4, 3] about the axis
-    (tilt, 0, 1), d = 0."""
+#: logits q of the mixture weight β the starting scan tries (β ≈ 0.02 and 0.98)
+_START_LOGITS = (-4.0, 4.0)
+
+
+def _isotropic_start(objective, idx: np.ndarray, tilt: np.ndarray, base_power: int = 1) -> np.ndarray:
+    """Starting points (len(idx), 4; 5 with a mixture): the best of 60 isotropic widths a' = c ∈ [1e-4, 3]
+    about the axis (tilt, 0, 1), d = 0 (with a mixture, for each β of ``_START_LOGITS``)."""
     scales = np.linspace(np.log(1e-4), np.log(3.0), 60)
-    grid = np.zeros((len(idx), len(scales), 4))
-    grid[..., 0] = grid[..., 1] = scales
+    logits = _START_LOGITS if base_power > 1 else (0.0,)
+    grid = np.zeros((len(idx), len(scales) * len(logits), 4 if base_power == 1 else 5))
+    grid[..., 0] = grid[..., 1] = np.tile(scales, len(logits))
     grid[..., 2] = tilt[:, None]
+    if base_power > 1:
+        grid[..., 4] = np.repeat(logits, len(scales))
     return grid[np.arange(len(idx)), np.argmin(objective(grid, idx), axis=1)]
 
 
 def _steps(x: np.ndarray) -> np.ndarray:
     """Initial simplex edges: 0.2 in log a' and log c, 0.1 in d, and 0.3 a' in b — the LTC's axis is at
     atan(b) and its width in that plane a'/(1 + b²), so a step of 0.3 a' in b moves the axis by a third of
-    the lobe's width, however sharp the lobe and however close to the horizon."""
+    the lobe's width, however sharp the lobe and however close to the horizon — and 1 in the mixture's logit."""
     n = len(x)
-    return np.stack([np.full(n, 0.2), np.full(n, 0.2), 0.3 * np.exp(x[:, 0]), np.full(n, 0.1)], axis=1)
+    steps = [np.full(n, 0.2), np.full(n, 0.2), 0.3 * np.exp(x[:, 0]), np.full(n, 0.1)]
+    return np.stack(steps + [np.full(n, 1.0)] * (x.shape[1] - 4), axis=1)
 
 
 def fit_cells(materials: list[Material], n_theta: int, settings: FitSettings | None = None, progress=None):
@@ -594,15 +728,17 @@ def fit_cells(materials: list[Material], n_theta: int, settings: FitSettings | N
     still misplaces more than 30 % of the lobe (the warm start lost a sharp lobe) is refitted from
     :func:`_isotropic_start` about the lobe's mean direction, keeping the better of the two.
 
-    Returns (minv (B, n_theta, 4), magnitude (B, n_theta, 3), error (B, n_theta), cos_theta (n_theta,),
-    Nelder–Mead iterations)."""
+    Returns (minv (B, n_theta, 4), magnitude (B, n_theta, 3), error (B, n_theta), power_weight (B, n_theta):
+    the mixture weight β (0 for the clamped cosine), cos_theta (n_theta,), Nelder–Mead iterations)."""
     s = settings or FitSettings()
+    n_power = _check_base_power(s.base_power)
     cos_theta = np.maximum(cos_theta_of(np.linspace(0.0, 1.0, n_theta)), COS_THETA_MIN)
     nb = len(materials)
     everything = np.arange(nb)
     minv = np.zeros((nb, n_theta, 4))
     magnitude = np.zeros((nb, n_theta, 3))
     error = np.zeros((nb, n_theta))
+    power_weight = np.zeros((nb, n_theta))
     x = None
     previous_tan = None
     iterations = 0
@@ -612,24 +748,24 @@ def fit_cells(materials: list[Material], n_theta: int, settings: FitSettings | N
         wx, wy, wz = (np.ascontiguousarray(cells.w[..., k]) for k in range(3))
 
         def objective(p, idx, cells=cells, wx=wx, wy=wy, wz=wz, power=s.power):
-            d = _density(p, wx[idx], wy[idx], wz[idx])
+            d = _density(p, wx[idx], wy[idx], wz[idx], n_power)
             r = np.abs(d - cells.p[idx, None, :])
             r = r * r * r if power == 3 else r**power
             return np.einsum("bs,bks->bk", cells.weight[idx], r)
 
         if x is None:
-            x = _isotropic_start(objective, everything, np.zeros(nb))
+            x = _isotropic_start(objective, everything, np.zeros(nb), n_power)
         else:
             x = x.copy()
             x[:, 2] += cells.mean_tan - previous_tan
         previous_tan = cells.mean_tan
         x_new, f_new, it = nelder_mead(objective, x, _steps(x), s.max_iter, s.ftol)
         iterations += it
-        d = _density(x_new[:, None, :], wx, wy, wz)[:, 0]
+        d = _density(x_new[:, None, :], wx, wy, wz, n_power)[:, 0]
         l1 = np.einsum("bs,bs->b", cells.weight, np.abs(d - cells.p))
         lost = np.flatnonzero(live & (l1 > 0.3))
         if len(lost):
-            retry = _isotropic_start(objective, lost, cells.mean_tan[lost])
+            retry = _isotropic_start(objective, lost, cells.mean_tan[lost], n_power)
             x_retry, f_retry, it = nelder_mead(
                 lambda p, idx, lost=lost: objective(p, lost[idx]), retry, _steps(retry), s.max_iter, s.ftol
             )
@@ -639,11 +775,23 @@ def fit_cells(materials: list[Material], n_theta: int, settings: FitSettings | N
         x = np.where(live[:, None], x_new, x)
         # magnitude and the reported error by the hemisphere quadrature
         axis, width = _lobe_axis_and_width(cells)
-        magnitude[:, i], error[:, i] = _check(materials, float(ct), axis, width, x, s.n_quadrature)
+        magnitude[:, i], error[:, i] = _check(materials, float(ct), axis, width, x, s.n_quadrature, n_power)
         minv[:, i] = np.where(live[:, None], params_to_minv(x), [0.0, 1.0, 0.0, 1.0])
+        if n_power > 1:
+            power_weight[:, i] = np.where(live, sigmoid(x[:, 4]), 0.0)
         if progress is not None:
             progress(i + 1, n_theta)
-    return minv, magnitude, error, cos_theta, iterations
+    return minv, magnitude, error, power_weight, cos_theta, iterations
+
+
+def _check_base_power(base_power) -> int:
+    if not (isinstance(base_power, int) and base_power >= 1 and base_power % 2 == 1 and base_power <= MAX_BASE_POWER):
+        raise ArgumentError(
+            f"base_power must be an odd integer in [1, {MAX_BASE_POWER}] (the edge integral's recurrence runs over "
+            f"the odd powers), got {base_power!r}",
+            field="base_power",
+        )
+    return base_power
 
 
 def _summary(error: np.ndarray) -> dict:
@@ -664,21 +812,26 @@ def fit_family(name: str, size: int = DEFAULT_SIZE, params: dict | None = None, 
     materials = [family.material(float(a), params) for a in alpha]
     start = time.perf_counter()
     s = settings or FitSettings()
-    minv, magnitude, error, cos_theta, iterations = fit_cells(materials, size, s, progress)
+    minv, magnitude, error, weight, cos_theta, iterations = fit_cells(materials, size, s, progress)
     meta = _meta(name, family.material_type, {**family.fixed, **params}, (size, size), s, start, error, iterations)
     meta["roughness_parameter"] = family.roughness_parameter
     meta["alpha_min"] = family.alpha_min
-    return LtcTable(minv, magnitude, error, cos_theta, alpha, meta)
+    return LtcTable(minv, magnitude, error, cos_theta, alpha, meta, weight)
 
 
 def fit_material(material: Material, n_theta: int = DEFAULT_INSTANCE_SIZE, settings=None, progress=None):
-    """1-D table (view angle only) of one material with its exact parameters."""
+    """1-D table (view angle only) of one material with its exact parameters (with a mixture base that no cell
+    uses — β < ``MIN_POWER_WEIGHT`` everywhere — the clamped-cosine fit instead)."""
     start = time.perf_counter()
     s = settings or FitSettings()
-    minv, magnitude, error, cos_theta, iterations = fit_cells([material], n_theta, s, progress)
+    minv, magnitude, error, weight, cos_theta, iterations = fit_cells([material], n_theta, s, progress)
+    if s.base_power > 1 and np.max(weight) < MIN_POWER_WEIGHT:
+        # no cell uses the cosⁿ lobe (a GGX-like, heavy-tailed lobe): the clamped-cosine fit spares the
+        # shader the recurrence
+        return fit_material(material, n_theta, replace(s, base_power=1), progress)
     params = material.model_dump(mode="json", exclude={"type"})
     meta = _meta(material.type, material.type, params, (n_theta, 1), s, start, error, iterations)
-    return LtcTable(minv, magnitude, error, cos_theta, np.array([np.nan]), meta)
+    return LtcTable(minv, magnitude, error, cos_theta, np.array([np.nan]), meta, weight)
 
 
 def _meta(brdf, material_type, params, size, s: FitSettings, start, error, iterations) -> dict:
@@ -692,6 +845,8 @@ def _meta(brdf, material_type, params, size, s: FitSettings, start, error, itera
         "cos_theta_min": COS_THETA_MIN,
         "roughness_mapping": ROUGHNESS_MAPPING if size[1] > 1 else None,
         "alpha_min": ALPHA_MIN,
+        "base_power": s.base_power,
+        "base": "clamped cosine" if s.base_power == 1 else f"(1 - w) clamped cosine + w cos^{s.base_power}, w per cell",
         "objective": f"L{s.power}: sum over the fit directions of w |D - p|^{s.power}",
         "error_metric": "L1: integral of |D - p| over the sphere = 2 - 2 integral of min(D, p) "
         "(hemisphere_quadrature about the lobe's peak)",
@@ -709,9 +864,12 @@ def fit_ltc(brdf: str, params: dict | None = None, size: int | None = None, sett
     ``brdf`` is a family (ggx, beckmann, phong, blinn_phong, ward) — a 2-D table over roughness unless
     ``params`` fixes the roughness parameter (``alpha`` / ``exponent``), which makes it a single material —
     or any material type (lambert, microfacet, lafortune, ashikhmin_shirley, measured, …), fitted as the one
-    material ``params`` describe (a 1-D table over the view angle).
+    material ``params`` describe (a 1-D table over the view angle). ``params["base_power"]`` (odd n, not a
+    material parameter) fits the mixture base with cosⁿ.
     """
     params = dict(params or {})
+    if "base_power" in params:  # a fitter setting, given like the material's parameters on the command line
+        settings = replace(settings or FitSettings(), base_power=_check_base_power(params.pop("base_power")))
     if brdf in FAMILIES:
         family = FAMILIES[brdf]
         if family.roughness_parameter not in params:

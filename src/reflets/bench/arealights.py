@@ -2,10 +2,14 @@
 
 A 4×4 plane and one unit square light at height 1 (camera (0, 3, 4), fov 45°), Phong ρ_d = 0, ρ_s = 1 with
 e ∈ {150, 200, 500} (the document's un-normalised form), GGX α ∈ {0.1, 0.3, 0.6} and Lambert; every method at
-several settings. For each: median frame time over ≥ 10 frames at 800×600 (draw only, read-back excluded;
-GPU timer queries on a real GPU, finish() + wall clock on llvmpipe), light samples evaluated per pixel (mean
-over the plane), and relative MSE and FLIP against the unoccluded NumPy reference. Errors are measured at
-200×150 (same camera) so the reference stays affordable; times at 800×600. Writes arealights.{json,md,png}.
+several settings. Then the other BRDFs that have a shipped ``ltc`` table (Beckmann, normalised Phong and
+Blinn-Phong, Ward) at α = 0.1 and 0.3 (Phong lobes: the equivalent e = 2/α² − 2): the ``ltc`` bases and
+brute 8². For each: median frame time over ≥ 10 frames at 800×600 (draw only, read-back excluded; GPU timer
+queries on a real GPU, finish() + wall clock on llvmpipe), light samples evaluated per pixel (mean over the
+plane), relative MSE and FLIP against the unoccluded NumPy reference, and the largest error as a
+fraction of the peak against a converged ``brute`` 64² grid (the Monte Carlo reference's own noise reaches
+4 % of the peak, too much for a maximum). Errors are measured at 200×150 (same camera) so the reference stays
+affordable; times at 800×600. Writes arealights.{json,md,png}.
 """
 
 from __future__ import annotations
@@ -30,6 +34,19 @@ MATERIALS = {
     "ggx a=0.6": {"type": "microfacet", "distribution": "ggx", "alpha": 0.6},
     "lambert": {"type": "lambert", "albedo": [0.8, 0.8, 0.8]},
 }
+_LOBE = {"kd": [0, 0, 0], "ks": [1, 1, 1]}
+#: the families of the other shipped ltc tables, measured with TABLE_SETTINGS only
+TABLE_MATERIALS = {
+    f"{name} a={alpha}": material
+    for alpha in (0.1, 0.3)
+    for name, material in (
+        ("beckmann", {"type": "microfacet", "distribution": "beckmann", "alpha": alpha}),
+        ("phong normalized", {"type": "phong", "normalized": True, "exponent": 2 / alpha**2 - 2, **_LOBE}),
+        ("blinn-phong normalized", {"type": "blinn_phong", "normalized": True, "exponent": 2 / alpha**2 - 2, **_LOBE}),
+        ("ward", {"type": "ward", "variant": "duer", "alpha": alpha, **_LOBE}),
+    )
+}
+TABLE_SETTINGS = ("ltc", "ltc base=cosine", "brute 8²")
 
 #: (curve label, method, parameters, spp)
 SETTINGS = (
@@ -38,8 +55,10 @@ SETTINGS = (
     + [(f"biased t={t} {n}²", "biased", {"threshold": t, "grid": n}, 1) for t in (0.99, 0.9) for n in (4, 8)]
     + [(f"mc mis {s}spp", "mc", {"strategy": "mis", "samples": 16}, s) for s in (16, 64, 256)]
     + [("mc two-region 64spp", "mc", {"strategy": "two_region", "samples": 16}, 64)]
-    + [("analytic", "analytic", {}, 1), ("ltc", "ltc", {}, 1)]
+    + [("analytic", "analytic", {}, 1), ("ltc", "ltc", {}, 1), ("ltc base=cosine", "ltc", {"base": "cosine"}, 1)]
 )
+#: the converged grid the largest error is measured against (64² vs 128²: ≤ 7·10⁻⁴ of the peak on these scenes)
+EXACT_GRID = 64
 
 
 def scene_dict(material: dict, size=(800, 600)) -> dict:
@@ -71,7 +90,11 @@ def _time_image(technique, size, spp: int, repeats: int) -> float:
     return statistics.median(times)
 
 
-def bench_arealights(quick: bool, out_dir: Path) -> tuple[dict, str]:
+def bench_arealights(
+    quick: bool, out_dir: Path, materials: list[str] | None = None, settings: list[str] | None = None
+) -> tuple[dict, str]:
+    """The whole suite; ``materials`` and ``settings`` (labels of MATERIALS and SETTINGS) run a part of it, e.g.
+    the ltc rows alone (tools/bench_arealights_part.py), without the ltc cost comparison."""
     import reflets
 
     from ..gpu import get_context
@@ -81,7 +104,14 @@ def bench_arealights(quick: bool, out_dir: Path) -> tuple[dict, str]:
     ctx = get_context()
     time_size, error_size = ((200, 150), (100, 75)) if quick else ((800, 600), (200, 150))
     frames, ref_spp = (3, 64) if quick else (10, 256)
-    materials = dict(list(MATERIALS.items())[:: (3 if quick else 1)])
+    part = materials is not None or settings is not None
+    everything = {**MATERIALS, **TABLE_MATERIALS}
+    if materials is None:
+        materials = dict(
+            list(MATERIALS.items())[:: (3 if quick else 1)] + list(TABLE_MATERIALS.items())[:: (4 if quick else 1)]
+        )
+    else:
+        materials = {name: everything[name] for name in materials}
     rows = []
     point_ms = None
     for mat_name, material in materials.items():
@@ -89,6 +119,8 @@ def bench_arealights(quick: bool, out_dir: Path) -> tuple[dict, str]:
         small = reflets.load_dict(scene_dict(material, error_size))
         ref = reflets.reference(small, spp=ref_spp, visibility=False, progress=False)
         emitter_free = _plane_mask(small)
+        exact = reflets.render(small, method="brute", grid=EXACT_GRID)[emitter_free]
+        peak = float(exact.max())
         if point_ms is None:  # the same plane with one point light: the cost floor of a shading pass
             point_scene = reflets.load_dict(
                 {
@@ -100,7 +132,12 @@ def bench_arealights(quick: bool, out_dir: Path) -> tuple[dict, str]:
             forward.prepare(point_scene)
             point_ms = _time_image(forward, time_size, 1, frames)
             forward.release()
-        for label, method, params, spp in SETTINGS:
+        chosen = [
+            s
+            for s in SETTINGS
+            if (settings is None or s[0] in settings) and (mat_name in MATERIALS or s[0] in TABLE_SETTINGS)
+        ]
+        for label, method, params, spp in chosen:
             try:
                 technique = get_technique(method)(ctx, **params)
             except RefletsError as exc:
@@ -131,9 +168,13 @@ def bench_arealights(quick: bool, out_dir: Path) -> tuple[dict, str]:
                     "flip": flip(
                         np.where(emitter_free[..., None], image, 0), np.where(emitter_free[..., None], ref.image, 0)
                     ),
+                    "max_error": float(np.abs(image[emitter_free] - exact).max() / peak),
                 }
             )
     plot(rows, out_dir / "arealights.png")
+    markdown = _markdown(rows, time_size, error_size, frames, ref_spp, point_ms)
+    if part:
+        return {"part": {"materials": list(materials), "settings": settings}, "rows": rows}, markdown
     cost = ltc_cost(ctx, time_size, rounds=3 if quick else 8)
     return {
         "time_size": list(time_size),
@@ -143,7 +184,7 @@ def bench_arealights(quick: bool, out_dir: Path) -> tuple[dict, str]:
         "point_light_ms": point_ms,
         "rows": rows,
         "ltc_cost": cost,
-    }, _markdown(rows, time_size, error_size, frames, ref_spp, point_ms) + _cost_markdown(cost, time_size)
+    }, markdown + _cost_markdown(cost, time_size)
 
 
 #: the LTC cost comparison: (label, method, parameters, light); GGX α = 0.3 as in the three.js reference
@@ -253,8 +294,8 @@ def horizon_accuracy(size, spp: int) -> list[dict]:
         ref = reflets.reference(scene, spp=spp, visibility=False, progress=False)
         mask = _plane_mask(scene)
         row = {"material": name, "reference_spp": spp}
-        for horizon in ("exact", "sphere"):
-            image = reflets.render(scene, method="ltc", horizon=horizon)
+        for horizon in ("exact", "sphere"):  # both with the clamped-cosine tables, the only ones sphere takes
+            image = reflets.render(scene, method="ltc", horizon=horizon, base="cosine")
             row[horizon] = relmse(image[mask][None], ref.image[mask][None])
         rows.append(row)
     return rows
@@ -291,18 +332,19 @@ def _markdown(rows, time_size, error_size, frames, ref_spp, point_ms) -> str:
         "",
         f"Frame time: median of {frames} frames at {time_size[0]}×{time_size[1]} (draw only). Error: relative MSE "
         f"(eps 0.01) and FLIP over the plane at {error_size[0]}×{error_size[1]} against the unoccluded NumPy "
-        f"reference ({ref_spp} spp). One point light on the same plane: {point_ms:.2f} ms per frame.",
+        f"reference ({ref_spp} spp); max error: the largest |error| over the plane as a fraction of the peak, "
+        f"against brute {EXACT_GRID}² (converged). One point light on the same plane: {point_ms:.2f} ms per frame.",
         "",
-        "| material | setting | ms / frame | × point light | samples / px | relMSE | FLIP |",
-        "|---|---|---|---|---|---|---|",
+        "| material | setting | ms / frame | × point light | samples / px | relMSE | FLIP | max error |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         if "error" in r:
-            lines.append(f"| {r['material']} | {r['setting']} | — | — | — | — | {r['error']} |")
+            lines.append(f"| {r['material']} | {r['setting']} | — | — | — | — | {r['error']} | — |")
             continue
         lines.append(
             f"| {r['material']} | {r['setting']} | {r['frame_ms']:.1f} | {r['ratio_to_point_light']:.1f} | "
-            f"{r['samples_per_pixel']:.1f} | {r['relmse']:.2e} | {r['flip']:.3f} |"
+            f"{r['samples_per_pixel']:.1f} | {r['relmse']:.2e} | {r['flip']:.3f} | {r['max_error']:.2%} |"
         )
     lines += ["", "![error vs time](arealights.png)", ""]
     return "\n".join(lines)

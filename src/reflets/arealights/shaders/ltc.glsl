@@ -8,7 +8,10 @@
 // both sides of a branch), LTC_UNIFORM_LIGHTS (> 0: the polygon-light records, in the layout of the light
 // buffer, also come as a uniform array of that many lights, read instead of the buffer: uniform loads are
 // broadcasts, buffer loads are per-pixel gathers on llvmpipe), LTC_VERTICES (> 0: every polygon light of the
-// scene has that many vertices, so the edge loops have a constant trip count and unroll).
+// scene has that many vertices, so the edge loops have a constant trip count and unroll), LTC_POWER (the
+// table's base: 1 the clamped cosine; odd n > 1 the mixture (1 − β) clamped cosine + β cosⁿ, β per cell in the
+// magnitude texture's alpha, whose polygon integral adds (n − 1)/2 recurrence steps per edge), LTC_CUT (with a
+// mixture: the cosine of the cone outside which the cosⁿ lobe is cut off, see ltc_polygon_integral).
 
 // LTC_PROFILE (cost breakdown only; the images are wrong): 0 everything; otherwise drop one stage to time it.
 // (macros, not constants: an undefined name in #if silently reads 0)
@@ -18,7 +21,7 @@
 #define LTC_PROFILE_FRAME_ONLY 4  // nothing beyond the forward pass's shading frame
 
 uniform sampler2D a_ltc_minv;       // (m02, m11, m20, m22) of a multiple of M⁻¹ = [[1,0,m02],[0,m11,0],[m20,0,m22]]
-uniform sampler2D a_ltc_magnitude;  // ∫ f cos dω per RGB channel (alpha unused)
+uniform sampler2D a_ltc_magnitude;  // ∫ f cos dω per RGB channel; alpha: the mixture weight β of cosⁿ
 uniform float a_ltc_roughness;      // the material's roughness coordinate r ∈ [0, 1] (0 for one-material tables)
 uniform vec3 a_ltc_scale;           // RGB factor on the table's magnitude (specular / ks of the material)
 uniform vec3 a_ltc_diffuse;         // Lambertian albedo ρ_d
@@ -54,21 +57,67 @@ float ltc_edge(vec3 a, vec3 b) {
     return ltc_theta_over_sin(dot(a, b), inversesqrt(max(dot(c, c), 1e-30))) * c.z;
 }
 
+#if LTC_POWER > 1
+// Σ_{k = 2, 4, …, n − 1} J_k of the arc a → b, J_k = ∫ h^k ds with h the arc's z coordinate (θ = J_0): the
+// recurrence J_k = ((k − 1) C² J_{k−2} − [h^{k−1} h']_a^b)/k of Arvo's axial moments; mirrors
+// ltc_fit.power_edge_sum. The edge's cosⁿ term is Γ_z (θ + this): for odd n, (n + 1)/(2π) ∫_P zⁿ
+// = (1/2π) Σ_edges Γ_z Σ_{k even < n} J_k. Also raises z_max to the arc's highest z (C = sqrt(C²) where h
+// peaks inside the arc, else the higher end).
+float ltc_power_sum(vec3 a, vec3 b, float cos_theta, float inv_sin, float theta, inout float z_max) {
+    float slope_a = (b.z - cos_theta * a.z) * inv_sin;  // h'(0) and h'(θ): the arc's z slope at its ends
+    float slope_b = (b.z * cos_theta - a.z) * inv_sin;
+    float c2 = a.z * a.z + slope_a * slope_a;
+    z_max = max(z_max, slope_a > 0.0 && slope_b < 0.0 ? sqrt(c2) : max(a.z, b.z));
+    float pa = a.z * slope_a, pb = b.z * slope_b;  // h^{k−1} h' at both ends
+    float a2 = a.z * a.z, b2 = b.z * b.z;
+    float j = theta, sum = 0.0;
+    for (int k = 2; k < LTC_POWER; k += 2) {
+        j = (float(k - 1) * c2 * j - (pb - pa)) / float(k);
+        sum += j;
+        pa *= a2;
+        pb *= b2;
+    }
+    return sum;
+}
+#endif
+
+// The edge terms of the lobe's base: sum.x += the clamped cosine's θ Γ_z (as ltc_edge); for a mixture table
+// (``mixture``, a constant at every call: the branch folds away) also sum.y += Γ_z Σ J_k (cosⁿ's excess) and
+// the polygon's support: support.x its highest z, support.yz the least and greatest Γ_z (all of one sign: the
+// pole z is inside the polygon).
+void ltc_edge_terms(vec3 a, vec3 b, bool mixture, inout vec2 sum, inout vec3 support) {
+    vec3 c = cross(a, b);
+    float cos_theta = dot(a, b);
+    float inv_sin = inversesqrt(max(dot(c, c), 1e-30));
+    float theta_over_sin = ltc_theta_over_sin(cos_theta, inv_sin);
+    sum.x += theta_over_sin * c.z;
+#if LTC_POWER > 1
+    if (mixture) {
+        sum.y += inv_sin * ltc_power_sum(a, b, cos_theta, inv_sin, theta_over_sin / inv_sin, support.x) * c.z;
+        support.yz = vec2(min(support.y, c.z), max(support.z, c.z));
+    }
+#endif
+}
+
 // One edge a → b (unit vectors) of a polygon clipped to z ≥ 0, without building the clipped polygon: the part of
-// the edge above the horizon contributes its edge term; where the edge leaves (enters) the upper hemisphere its
+// the edge above the horizon contributes its edge terms; where the edge leaves (enters) the upper hemisphere its
 // crossing point is kept as the exit (entry) point. A convex polygon crosses the horizon at most twice, and the
 // clipped polygon closes with one horizon edge from the exit to the entry point (ltc_polygon_integral).
-// The crossing direction is a.z b − b.z a (z = 0), turned to point between a and b: no division.
-void ltc_clipped_edge(vec3 a, vec3 b, inout float sum, inout vec3 exit_point, inout vec3 entry_point) {
+// The crossing direction is a.z b − b.z a (z = 0), turned to point between a and b: no division. An edge wholly
+// below the horizon becomes the point p → p: no terms, no support.
+void ltc_clipped_edge(
+    vec3 a, vec3 b, bool mixture, inout vec2 sum, inout vec3 support, inout vec3 exit_point, inout vec3 entry_point
+) {
 #if LTC_PROFILE == LTC_PROFILE_NO_CLIP
-    sum += ltc_edge(a, b);
+    ltc_edge_terms(a, b, mixture, sum, support);
     return;
 #endif
     bool above_a = a.z >= 0.0, above_b = b.z >= 0.0;
     vec2 q = (a.z * b.xy - b.z * a.xy) * (above_a ? 1.0 : -1.0);
     vec3 p = vec3(q * inversesqrt(max(dot(q, q), 1e-30)), 0.0);
-    float term = ltc_edge(above_a ? a : p, above_b ? b : p);
-    sum += (above_a || above_b) ? term : 0.0;
+    vec2 terms = vec2(0.0);
+    ltc_edge_terms(above_a ? a : p, above_b ? b : p, mixture, terms, support);
+    sum += (above_a || above_b) ? terms : vec2(0.0);
     if (above_a && !above_b) exit_point = p;
     if (!above_a && above_b) entry_point = p;
 }
@@ -100,25 +149,42 @@ float ltc_polygon_integral_sphere(int i, int n, mat3 T, vec3 x) {
 }
 
 // ∫ max(0, ω_z)/π dω over the spherical polygon of light i's vertices, transformed by T after subtracting x:
-// (1/2π)|Σ θ_k Γ_k·z| over the polygon clipped to z ≥ 0 (Lambert's formula). The absolute value makes either
-// winding right, which is how a two-sided light seen from behind is handled. No local arrays (the vertices
-// stream from the light records), no data-dependent branch: this is what keeps it fast on SIMD rasterisers.
-float ltc_polygon_integral(int i, int n, mat3 T, vec3 x) {
+// (1/2π)|Σ θ_k Γ_k·z| over the polygon clipped to z ≥ 0 (Lambert's formula). With ``mixture`` and weight
+// β: ∫ (1 − β) max(0, ω_z)/π + β W (n + 1)/(2π) max(0, ω_z)ⁿ, where the support window W is 0 when the
+// polygon lies wholly outside the cone z ≥ LTC_CUT that holds all but LTC_CUT^(n+1) of the cosⁿ lobe (its
+// highest point below the cut and the pole outside), else 1: the lobe ends there instead of fading as a power
+// law. The absolute value makes either winding right, which is how a two-sided light seen from behind is
+// handled. No local arrays (the vertices stream from the light records), no data-dependent branch (``mixture``
+// is a constant at each call): this is what keeps it fast on SIMD rasterisers.
+float ltc_polygon_integral(int i, int n, mat3 T, vec3 x, bool mixture, float weight) {
 #if LTC_HORIZON == 1
+#if LTC_POWER > 1
+#error "the sphere horizon integrates the clamped cosine only"
+#endif
     return ltc_polygon_integral_sphere(i, n, T, x);
 #endif
     vec3 first = normalize(T * (ltc_vertex(i, 0) - x));
     vec3 a = first;
     vec3 exit_point = vec3(0.0), entry_point = vec3(0.0);
-    float sum = 0.0;
+    vec2 sum = vec2(0.0);  // Σ θ Γ_z, Σ Γ_z Σ J_k
+    vec3 support = vec3(0.0, 1e30, -1e30);  // highest z, least and greatest Γ_z
     for (int k = 1; k < n; ++k) {
         vec3 b = normalize(T * (ltc_vertex(i, k) - x));
-        ltc_clipped_edge(a, b, sum, exit_point, entry_point);
+        ltc_clipped_edge(a, b, mixture, sum, support, exit_point, entry_point);
         a = b;
     }
-    ltc_clipped_edge(a, first, sum, exit_point, entry_point);
-    sum += ltc_edge(exit_point, entry_point);  // 0 when nothing was clipped (both stay 0)
-    return abs(sum) * (0.5 * INV_PI);
+    ltc_clipped_edge(a, first, mixture, sum, support, exit_point, entry_point);
+    // the horizon edge (0 when nothing was clipped); on it J_k = 0 for k > 0
+    float horizon = cross(exit_point, entry_point).z;
+    sum.x += ltc_edge(exit_point, entry_point);
+#if LTC_POWER > 1
+    if (mixture) {
+        bool pole_inside = min(support.y, horizon) >= 0.0 || max(support.z, horizon) <= 0.0;
+        float window = pole_inside || support.x >= LTC_CUT ? weight : 0.0;
+        return abs((1.0 - weight) * sum.x + window * (sum.x + sum.y)) * (0.5 * INV_PI);
+    }
+#endif
+    return abs(sum.x) * (0.5 * INV_PI);
 }
 
 // Per fragment, shared by all lights: world → (rotated local frame, view in the xz plane) → M⁻¹, and the
@@ -126,15 +192,19 @@ float ltc_polygon_integral(int i, int n, mat3 T, vec3 x) {
 bool g_ltc_ready = false;
 mat3 g_ltc_transform;
 vec3 g_ltc_lobe;
+float g_ltc_weight;  // the mixture weight β of cosⁿ (0 for a clamped-cosine table)
 
 void ltc_setup(mat3 frame, vec3 wo) {
     vec2 uv = ltc_lookup(wo.z, a_ltc_roughness);
 #if LTC_PROFILE == LTC_PROFILE_NO_FETCH
     vec4 m = vec4(0.0, 1.0, 0.0, 1.0) + uv.xyxy * 1e-3;  // keeps the lookup's arithmetic alive
     g_ltc_lobe = a_ltc_scale;
+    g_ltc_weight = LTC_POWER > 1 ? 1.0 : 0.0;
 #else
     vec4 m = texture(a_ltc_minv, uv);
-    g_ltc_lobe = texture(a_ltc_magnitude, uv).rgb * a_ltc_scale;
+    vec4 magnitude = texture(a_ltc_magnitude, uv);
+    g_ltc_lobe = magnitude.rgb * a_ltc_scale;
+    g_ltc_weight = magnitude.a;
 #endif
     float len2 = dot(wo.xy, wo.xy);
     vec2 c = len2 > 1e-14 ? wo.xy * inversesqrt(len2) : vec2(1.0, 0.0);
@@ -163,14 +233,14 @@ vec3 area_light_contribution(int i, vec3 x, mat3 frame, vec3 wo) {
 #endif
     vec3 sum = vec3(0.0);
 #if LTC_DIFFUSE
-    sum += a_ltc_diffuse * ltc_polygon_integral(i, n, transpose(frame), x);
+    sum += a_ltc_diffuse * ltc_polygon_integral(i, n, transpose(frame), x, false, 0.0);
 #endif
 #if LTC_LOBE
     if (!g_ltc_ready) ltc_setup(frame, wo);
 #if LTC_PROFILE == LTC_PROFILE_NO_EDGES
     sum += g_ltc_lobe * g_ltc_transform[0];  // the setup's results stay live; no polygon integral
 #else
-    sum += g_ltc_lobe * ltc_polygon_integral(i, n, g_ltc_transform, x);
+    sum += g_ltc_lobe * ltc_polygon_integral(i, n, g_ltc_transform, x, LTC_POWER > 1, g_ltc_weight);
 #endif
 #endif
     return sum * head.rgb;
