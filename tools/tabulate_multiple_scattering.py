@@ -27,7 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from reflets.translucency.optics import fresnel_reflectance, refracted_cos
+from reflets.reference.volumetric import slab_reflectance
+from reflets.translucency.medium import Medium
 
 ETAS = (1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.7, 2.0)
 U = (0.0, 0.01, 0.02, 0.035, 0.05, 0.07, 0.1, 0.14, 0.2, 0.27, 0.35, 0.45, 0.55, 0.65, 0.75, 0.85, 0.95, 0.99)
@@ -40,55 +41,13 @@ OUT = Path(__file__).resolve().parents[1] / "src/reflets/data/translucency/multi
 
 
 def simulate(albedo, eta, photons, cos_incidence=1.0, seed=0, radial=False, max_events=30_000, chunk=100_000):
-    """(single, multiple) exitance per transmitted photon and the multiple scattering's radial histogram."""
-    rng = np.random.default_rng(seed)
-    cos_in = float(refracted_cos(cos_incidence, eta))
-    sin_in = np.sqrt(max(0.0, 1.0 - cos_in * cos_in))
-    sums = np.zeros(2)
-    hist = np.zeros(len(EDGES) - 1)
-    done = 0
-    while done < photons:
-        n = min(chunk, photons - done)
-        done += n
-        pos = np.zeros((n, 3))
-        d = np.tile([sin_in, 0.0, -cos_in], (n, 1))
-        w = np.ones(n)
-        events = np.zeros(n, np.int64)
-        idx = np.arange(n)
-        for _ in range(max_events):
-            if idx.size == 0:
-                break
-            s = -np.log1p(-rng.random(idx.size))
-            out = pos[idx, 2] + s * d[idx, 2] > 0.0
-            if out.any():
-                o = idx[out]
-                pos[o] += (-pos[o, 2] / d[o, 2])[:, None] * d[o]
-                pos[o, 2] = 0.0
-                reflect = rng.random(o.size) < fresnel_reflectance(d[o, 2], eta, inside=True)
-                d[o[reflect], 2] *= -1.0
-                leave = o[~reflect]
-                once = events[leave] == 1
-                sums[0] += w[leave[once]].sum()
-                many = leave[~once]
-                sums[1] += w[many].sum()
-                if radial:
-                    hist += np.histogram(np.hypot(pos[many, 0], pos[many, 1]), EDGES, weights=w[many])[0]
-                w[leave] = 0.0
-            inside = idx[~out]
-            pos[inside] += s[~out, None] * d[inside]
-            w[inside] *= albedo
-            events[inside] += 1
-            cos_t = 1.0 - 2.0 * rng.random(inside.size)
-            sin_t = np.sqrt(1.0 - cos_t * cos_t)
-            phi = 2.0 * np.pi * rng.random(inside.size)
-            d[inside] = np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), cos_t], axis=1)
-            low = inside[w[inside] < 1e-3]
-            if low.size:
-                survive = rng.random(low.size) < 0.1
-                w[low[survive]] *= 10.0
-                w[low[~survive]] = 0.0
-            idx = idx[w[idx] > 0.0]
-    return sums / photons, hist / photons
+    """(single, multiple) exitance per transmitted photon and the multiple scattering's radial histogram, lengths
+    in mean free paths (σ_t = 1), isotropic scattering: ``reference.volumetric.slab_reflectance``'s walk."""
+    medium = Medium(np.float64(1.0 - albedo), np.float64(albedo), 0.0, float(eta))
+    result = slab_reflectance(medium, photons, cos_incidence=cos_incidence, seed=seed, chunk=chunk,
+                              max_events=max_events, radial_edges=EDGES if radial else None)  # fmt: skip
+    hist = result.radial if radial else np.zeros(len(EDGES) - 1)
+    return np.array([result.single, result.multiple]), hist
 
 
 def main() -> None:

@@ -19,6 +19,7 @@ import numpy as np
 
 import reflets
 from reflets.bench.translucency import _compared_pixels, _object_scene
+from reflets.reference import store
 from reflets.reference.volumetric import VolumetricImage, render_volumetric
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -30,14 +31,7 @@ PROFILES = ("multiple_fit", "better_dipole", "dipole", "normalized_diffusion")
 
 
 def stored(name: str) -> VolumetricImage:
-    with np.load(ROOT / "benchmarks/results/references" / name) as data:
-        shape = tuple(int(v) for v in data["shape"])
-        mask = np.unpackbits(data["mask"])[: shape[0] * shape[1]].astype(bool).reshape(shape)
-        image = np.zeros((*shape, 3), np.float32)
-        stderr = np.zeros((*shape, 3), np.float32)
-        image[mask] = data["image"].astype(np.float32)
-        stderr[mask] = data["stderr"].astype(np.float32)
-        return VolumetricImage(image, stderr, mask, int(data["spp"]))
+    return store.read(ROOT / "benchmarks/results/references" / name)[0]
 
 
 def report(label: str, scene_for, ref: VolumetricImage, pixels) -> None:

@@ -86,13 +86,19 @@ def save(path: Path, image, digest: str, description: dict, seconds: float) -> N
 
 def load(path: Path, digest: str):
     """The stored image and its compute time, or None when the file is missing or made for something else."""
-    from .volumetric import VolumetricImage
-
     if not path.exists():
         return None
     with np.load(path) as data:
         if str(data["fingerprint"]) != digest and _digest(json.loads(str(data["description"]))) != digest:
             return None
+    return read(path)
+
+
+def read(path: Path):
+    """The stored image and its compute time, whatever it was made for (tools that know what they read)."""
+    from .volumetric import VolumetricImage
+
+    with np.load(path) as data:
         shape = tuple(int(v) for v in data["shape"])
         mask = np.unpackbits(data["mask"])[: shape[0] * shape[1]].astype(bool).reshape(shape)
         image = np.zeros((*shape, 3), np.float32)

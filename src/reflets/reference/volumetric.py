@@ -45,6 +45,8 @@ class SlabResult:
     single_stderr: float
     multiple_stderr: float
     photons: int
+    #: multiple scattering's exitance per photon in radial bins about the entry point (``radial_edges``)
+    radial: np.ndarray | None = None
 
     @property
     def total(self) -> float:
@@ -67,9 +69,11 @@ def slab_reflectance(
     chunk: int = 200_000,
     roulette_weight: float = 1e-3,
     max_events: int = 100_000,
+    radial_edges: np.ndarray | None = None,
 ) -> SlabResult:
     """Diffuse reflectance of a semi-infinite slab of a one-channel ``medium`` (scalar coefficients, mm⁻¹) lit by
-    a collimated beam at ``cos_incidence``; see the module docstring."""
+    a collimated beam at ``cos_incidence``; see the module docstring. ``radial_edges``: also the multiple
+    scattering's radial distribution of exit points (a diffusion profile's shape)."""
     if np.ndim(medium.sigma_a) != 0:
         raise ValueError("slab_reflectance takes a one-channel medium: use medium.channel(c)")
     sigma_t = float(medium.sigma_t)
@@ -77,6 +81,7 @@ def slab_reflectance(
     rng = np.random.default_rng(seed)
     sums = np.zeros(2)  # single, multiple: Σ w
     sums2 = np.zeros(2)  # Σ w² (per photon: a photon leaves once)
+    radial = None if radial_edges is None else np.zeros(len(radial_edges) - 1)
     cos_in = float(refracted_cos(cos_incidence, medium.eta))
     sin_in = np.sqrt(max(0.0, 1.0 - cos_in * cos_in))
     done = 0
@@ -109,6 +114,9 @@ def slab_reflectance(
                     for k, sel in ((0, single), (1, ~single)):
                         sums[k] += w[leave[sel]].sum()
                         sums2[k] += (w[leave[sel]] ** 2).sum()
+                    if radial_edges is not None:
+                        many = leave[~single]
+                        radial += np.histogram(np.hypot(pos[many, 0], pos[many, 1]), radial_edges, weights=w[many])[0]
                     w[leave] = 0.0
             inside = idx[~out]
             pos[inside] += s[~out, None] * d[inside]
@@ -131,6 +139,7 @@ def slab_reflectance(
         single_stderr=float(stderr[0]),
         multiple_stderr=float(stderr[1]),
         photons=photons,
+        radial=None if radial is None else radial / photons,
     )
 
 
