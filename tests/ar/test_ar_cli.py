@@ -48,7 +48,7 @@ def files(tmp_path_factory):
     for k, eye in enumerate([(0.2, 0.3, 0.4), (-0.25, 0.35, 0.3), (0.0, 0.45, 0.3)]):
         R, t = look_at_pose(eye, (0, 0.02, 0))
         linear = world.render(camera_fields(intrinsics, R, t), spp=16, seed=k)
-        codes = np.round(capture.encode_response(np.clip(linear, 0, 1)) * 255).astype(np.uint8)
+        codes = capture.quantise(linear)
         Image.fromarray(codes).save(folder / f"frame{k}.png")
         names.append(str(folder / f"frame{k}.png"))
     return folder, names

@@ -39,9 +39,8 @@ def setting():
     camera = camera_fields(intrinsics, R, t)
     photo_linear = world.render(camera, spp=32)
     truth = world.render(camera, objects, spp=32)
-    encode = lambda x: np.round(capture.encode_response(np.clip(x, 0, 1)) * 255).astype(np.uint8)  # noqa: E731
     cube = capture.CubeMap.from_equirect(read_image(SKY), 32)  # the true sky: this tests the compositing alone
-    return objects, intrinsics, R, t, camera, encode(photo_linear), truth, cube
+    return objects, intrinsics, R, t, camera, capture.quantise(photo_linear), truth, cube
 
 
 @pytest.fixture(scope="module")
@@ -76,7 +75,7 @@ def test_differential_beats_document_on_the_shadow(setting, composites):
     *_, photo, truth, _ = setting
     photo_linear = capture.decode_response(photo / 255.0)
     either = composites["differential"].coverage + composites["document"].coverage
-    truth_coded = capture.decode_response(np.round(capture.encode_response(np.clip(truth, 0, 1)) * 255) / 255)
+    truth_coded = capture.decode_response(capture.quantise(truth) / 255)
     shadow = (np.abs(truth_coded - photo_linear).max(axis=2) > 0.01) & (either == 0)
     assert shadow.sum() > 20
     error = {mode: reflets.compare(out.linear[shadow][None], truth_coded[shadow][None])["relmse"]

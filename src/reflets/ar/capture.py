@@ -186,6 +186,12 @@ def encode_response(linear, response="srgb") -> np.ndarray:
     return _apply_response(linear, response, linear_to_srgb, lambda gamma: 1.0 / gamma)
 
 
+def quantise(linear, response="srgb") -> np.ndarray:
+    """Linear radiance → the camera's 8-bit codes: clipped to [0, 1], encoded, rounded (a photograph)."""
+    codes = encode_response(np.clip(linear, 0.0, 1.0), response) * 255.0
+    return np.clip(np.round(codes), 0, 255).astype(np.uint8)
+
+
 def _smoothstep(edge0: float, edge1: float, x) -> np.ndarray:
     t = np.clip((np.asarray(x, np.float64) - edge0) / (edge1 - edge0), 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
@@ -537,5 +543,4 @@ def environment_view(
         rays = (centre + s[:, None] * rays) / radius
     light = EnvironmentLight(type="environment", file=Path("synthetic"))
     radiance = equirect_lookup(equirect_image, light, rays) * gain
-    codes = encode_response(np.clip(radiance, 0.0, 1.0), response) * 255.0
-    return np.clip(np.round(codes), 0, 255).astype(np.uint8).reshape(height, width, 3)
+    return quantise(radiance, response).reshape(height, width, 3)

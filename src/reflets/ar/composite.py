@@ -162,8 +162,7 @@ class Compositor:
         touched = on_object | np.any(np.abs(ratio - 1.0) > UNCHANGED, axis=1)
         changed = touched.reshape(height, s, width, s).any(axis=(1, 3))
         image = photo.copy()
-        codes = capture.encode_response(np.clip(linear[changed], 0.0, 1.0), self.response) * 255.0
-        image[changed] = np.clip(np.round(codes), 0, 255).astype(np.uint8)
+        image[changed] = capture.quantise(linear[changed], self.response)
         timings["composite_ms"] = 1e3 * (time.perf_counter() - t1)
         return Composite(image, linear.astype(np.float32), coverage.astype(np.float32), changed, timings)
 

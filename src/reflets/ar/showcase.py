@@ -48,11 +48,6 @@ RADIUS = 3.0
 SHADOW_DROP = 0.03
 
 
-def encode(linear: np.ndarray) -> np.ndarray:
-    """Linear radiance → an 8-bit sRGB photograph (clipped, rounded)."""
-    return np.round(capture.encode_response(np.clip(linear, 0.0, 1.0)) * 255.0).astype(np.uint8)
-
-
 def device_poses(count: int, radius: float = 0.45, height: float = 0.35):
     """Back-camera poses orbiting the board, looking at its centre."""
     for k in range(count):
@@ -79,18 +74,18 @@ def rig_capture(world: World, board: Board, back: Intrinsics, front: Intrinsics,
     cube = capture.CubeMap.empty(face)
     back_frames, front_frame, captured, errors = [], None, 0, []
     for k, (R, t) in enumerate(device_poses(len(GAINS))):
-        photo = encode(world.render(camera_fields(back, R, t), spp=4, seed=100 + k))
+        photo = capture.quantise(world.render(camera_fields(back, R, t), spp=4, seed=100 + k))
         back_frames.append(photo)
         pose = solve_pose(*detect(grey(photo), board), back)
         if pose is None:
             continue
         errors.append(pose_error(pose.R, pose.t, R, t)[0])
         sky = world.render(camera_fields(front, FRONT @ R, FRONT @ t), spp=spp, seed=200 + k)
-        frame = encode(GAINS[k] * sky)
+        frame = capture.quantise(GAINS[k] * sky)
         front_frame = frame if front_frame is None else front_frame
         gain = capture.capture(cube, frame, front, FRONT @ pose.R, FRONT @ pose.t, radius=RADIUS)
         if bracket:
-            short = encode(BRACKET * GAINS[k] * sky)
+            short = capture.quantise(BRACKET * GAINS[k] * sky)
             capture.capture(cube, short, front, FRONT @ pose.R, FRONT @ pose.t, radius=RADIUS,
                             exposure=BRACKET * gain)  # fmt: skip
         captured += 1
@@ -120,11 +115,11 @@ def gallery(out_dir: Path, size: tuple[int, int] = (320, 240)) -> dict:
     rig = rig_capture(world, board, back, Intrinsics.from_fov((size[0] // 2, size[1] // 2), 90), 64, bracket=True)
     R, t = view_pose()
     objects = load_dict(OBJECTS)
-    photo = encode(world.render(camera_fields(back, R, t), spp=32, seed=1))
-    truth = encode(world.render(camera_fields(back, R, t), objects, spp=32, seed=2))
+    photo = capture.quantise(world.render(camera_fields(back, R, t), spp=32, seed=1))
+    truth = capture.quantise(world.render(camera_fields(back, R, t), objects, spp=32, seed=2))
     pose = solve_pose(*detect(grey(photo), board), back)
     files = {"photograph": photo, "ground truth": truth,
-             "captured environment": encode(capture.to_equirect(rig.cube, 2 * size[0]))}  # fmt: skip
+             "captured environment": capture.quantise(capture.to_equirect(rig.cube, 2 * size[0]))}  # fmt: skip
     truth_linear = capture.decode_response(truth / 255.0)
     errors, masks = {}, None
     for mode in ("differential", "document"):

@@ -33,7 +33,7 @@ from ..ar.board import Board
 from ..ar.camera import Intrinsics, camera_fields
 from ..ar.composite import Compositor
 from ..ar.session import Session, grey
-from ..ar.showcase import OBJECTS, RADIUS, device_poses, encode, regions, rig_capture, view_pose
+from ..ar.showcase import OBJECTS, RADIUS, device_poses, regions, rig_capture, view_pose
 from ..ar.synthetic import look_at_pose, render_view
 from ..ar.tracking import detect, pose_error, solve_pose
 from ..ar.world import SKY, World
@@ -79,7 +79,7 @@ def _captures(world: World, board: Board, quick: bool, out_dir: Path):
     single = rig_capture(world, board, back, front, face)
     bracketed = rig_capture(world, board, back, front, face, bracket=True)
     write_png8(out_dir / "ar_capture_frame.png", single.front_frame)
-    write_png8(out_dir / "ar_captured_environment.png", encode(capture.to_equirect(bracketed.cube, 256)))
+    write_png8(out_dir / "ar_captured_environment.png", capture.quantise(capture.to_equirect(bracketed.cube, 256)))
     info = {"frames": len(single.back_frames), "captured": single.captured, "face": face,
             "device_pose_mm_max": single.pose_mm_max}  # fmt: skip
     return {"captured": single.cube, "captured, bracketed": bracketed.cube}, info, single.back_frames
@@ -91,8 +91,8 @@ def _composites(world: World, board: Board, cubes: dict, quick: bool, out_dir: P
     R, t = view_pose()
     camera = camera_fields(intrinsics, R, t)
     spp = 16 if quick else 64
-    photo = encode(world.render(camera, spp=spp, seed=1))
-    truth = encode(world.render(camera, objects, spp=spp, seed=2))
+    photo = capture.quantise(world.render(camera, spp=spp, seed=1))
+    truth = capture.quantise(world.render(camera, objects, spp=spp, seed=2))
     pose = solve_pose(*detect(grey(photo), board), intrinsics)
     lightings = {**cubes, "light probe": capture.CubeMap.from_equirect(read_image(SKY), cubes["captured"].size)}
     truth_linear, photo_linear = capture.decode_response(truth / 255.0), capture.decode_response(photo / 255.0)
