@@ -8,10 +8,10 @@ that compare the `ltc` bases: ltc, ltc base=cosine and brute 8² for every mater
 """
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
+from reflets import jsonio
 from reflets.bench import machine
 from reflets.bench.arealights import MATERIALS, TABLE_MATERIALS, bench_arealights
 
@@ -30,7 +30,7 @@ def main(argv=None) -> int:
     info = machine()
     command = " ".join(["python tools/bench_arealights_part.py", *(f'"{a}"' if " " in a else a for a in sys.argv[1:])])
     markdown += f"\nMachine: {info['cores']} cores, {info['platform']}. Command: `{command}`.\n"
-    (args.out_dir / "arealights-part.json").write_text(json.dumps({"machine": info, **results}, indent=2))
+    jsonio.write(args.out_dir / "arealights-part.json", {"machine": info, **results}, indent=2)
     (args.out_dir / "arealights-part.md").write_text(markdown)
     print(markdown)
     return 0

@@ -7,7 +7,6 @@ traceback instead.
 from __future__ import annotations
 
 import argparse
-import json
 import re
 import sys
 import time
@@ -15,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import jsonio
 from .errors import ARRAY_READ_ERRORS, ArgumentError, RefletsError
 
 EXIT_USER_ERROR = 2
@@ -58,7 +58,7 @@ def cmd_render(args) -> int:
     size = _size(args.size) if args.size else None
     scene = as_scene(args.scene)
     image = render(scene, method=args.method, size=size, seed=args.seed, spp=args.spp, **_params(args.param))
-    write_image(out, image, exposure=args.exposure, tonemap=args.tonemap)
+    write_image(out, image, exposure=args.exposure, tonemap=args.tonemap, bit_depth=args.bit_depth)
     print(f"wrote {out} ({image.shape[1]}x{image.shape[0]})")
     return 0
 
@@ -84,7 +84,7 @@ def cmd_view(args) -> int:
     if args.save_scene:
         print(f"wrote {args.save_scene}")
     if args.stats:
-        Path(args.stats).write_text(json.dumps(status, indent=1), encoding="utf-8")
+        jsonio.write(args.stats, status, indent=1)
     times = status["window_frame_ms"][1:] or status["window_frame_ms"]
     frames = len(status["window_frame_ms"])
     print(
@@ -190,7 +190,7 @@ def cmd_ar_track(args) -> int:
         else {"image": str(name), "R_world_to_cam": None, "t_world_to_cam": None, "markers": 0}
         for name, p in zip(args.images, poses, strict=True)
     ]
-    Path(args.output).write_text(json.dumps({"views": views}, indent=1), encoding="utf-8")
+    jsonio.write(args.output, {"views": views}, indent=1)
     found = sum(p is not None for p in poses)
     print(f"wrote {args.output}: a pose for {found} of {len(poses)} images")
     return 0
@@ -356,7 +356,7 @@ def cmd_compare(args) -> int:
 
         write_png8(Path(args.diff), difference_image(a, b))
     if args.json:
-        print(json.dumps(result))
+        print(jsonio.dumps(result))
     else:
         for key, value in result.items():
             print(f"{key:>7}  {value:.6g}")
@@ -400,7 +400,7 @@ def cmd_info(args) -> int:
         info["opengl"] = {"error": str(exc)}
         status = EXIT_USER_ERROR
     if args.json:
-        print(json.dumps(info, indent=2))
+        print(jsonio.dumps(info, indent=2))
     else:
         gl = info["opengl"]
         if "error" in gl:
@@ -419,7 +419,7 @@ def cmd_info(args) -> int:
 def cmd_schema(args) -> int:
     from .scene.schema import scene_json_schema
 
-    print(json.dumps(scene_json_schema(), indent=2))
+    print(jsonio.dumps(scene_json_schema(), indent=2))
     return 0
 
 
@@ -515,6 +515,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--exposure", type=float, default=0.0, help="PNG only: exposure in stops (default 0)")
     p.add_argument("--tonemap", choices=["srgb", "aces"], default="srgb", help="PNG only: tone curve")
+    p.add_argument("--bit-depth", type=int, choices=[8, 16], default=8, help="PNG only: bits per channel (default 8)")
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("view", help="interactive window over the persistent renderer (orbit, pick, edit, compare)")

@@ -8,7 +8,6 @@ and, where the scene has a closed-form solution, prints the largest relative err
 from __future__ import annotations
 
 import html
-import json
 import platform
 import statistics
 import time
@@ -16,6 +15,7 @@ from dataclasses import asdict, dataclass
 from importlib import resources
 from pathlib import Path
 
+from . import jsonio
 from .errors import OutputError
 from .gpu import get_context, gl_info
 from .imageio import write_image
@@ -159,8 +159,10 @@ def run_demo(out_dir: Path, size: tuple[int, int] | None = None) -> list[DemoRes
         augmented = _ar_entry(out_dir)
     info = gl_info()
     _write_gallery(out_dir, results, info, augmented)
-    (out_dir / "results.json").write_text(
-        json.dumps({"opengl": info, "results": [asdict(r) for r in results], "augmented_reality": augmented}, indent=2)
+    jsonio.write(
+        out_dir / "results.json",
+        {"opengl": info, "results": [asdict(r) for r in results], "augmented_reality": augmented},
+        indent=2,
     )
     _print_summary(results, info, out_dir)
     return results

@@ -29,6 +29,7 @@ from reflets.errors import ArgumentError, ImageError, OutputError
 __all__ = [
     "IMAGE_READ_EXTENSIONS",
     "IMAGE_WRITE_EXTENSIONS",
+    "PNG_BIT_DEPTHS",
     "TONEMAP_MODES",
     "check_output_path",
     "linear_to_srgb",
@@ -44,6 +45,8 @@ IMAGE_READ_EXTENSIONS: tuple[str, ...] = (".exr", ".hdr", ".pic", ".npy", ".png"
 IMAGE_WRITE_EXTENSIONS: tuple[str, ...] = (".exr", ".hdr", ".npy", ".png")
 #: Tone-mapping curves accepted by :func:`tonemap` and :func:`write_image`.
 TONEMAP_MODES: tuple[str, ...] = ("srgb", "aces")
+#: Bits per channel :func:`write_image` can write to a PNG.
+PNG_BIT_DEPTHS: tuple[int, ...] = (8, 16)
 
 # Exposure is a number of stops; beyond this range 2**exposure over/underflows float32 for any sensible image.
 _MAX_EXPOSURE = 64.0
@@ -105,13 +108,15 @@ def tonemap(image: np.ndarray, exposure: float = 0.0, mode: str = "srgb") -> np.
     return _tonemap_checked(_as_rgb(image), _check_exposure(exposure), _check_tonemap(mode))
 
 
-def _tonemap_checked(rgb: np.ndarray, stops: float, curve: str) -> np.ndarray:
+def _tonemap_checked(rgb: np.ndarray, stops: float, curve: str, bit_depth: int = 8) -> np.ndarray:
+    """uint8 or uint16 sRGB codes (``bit_depth`` 8 or 16)."""
     # The upper clamp keeps the rational ACES fit away from inf/inf; both curves saturate long before 1e6.
     x = np.clip(rgb.astype(np.float64) * 2.0**stops, 0.0, 1e6)
     if curve == "aces":
         x = _aces_narkowicz(x)
     encoded = linear_to_srgb(np.clip(x, 0.0, 1.0))
-    return np.round(np.clip(encoded, 0.0, 1.0) * 255.0).astype(np.uint8)
+    levels, dtype = (65535.0, np.uint16) if bit_depth == 16 else (255.0, np.uint8)
+    return np.round(np.clip(encoded, 0.0, 1.0) * levels).astype(dtype)
 
 
 # --------------------------------------------------------------------------------------------- validation
@@ -129,6 +134,16 @@ def _check_exposure(exposure: float, file: str | Path | None = None) -> float:
             field="exposure",
         )
     return stops
+
+
+def _check_bit_depth(bit_depth: int, file: str | Path | None = None) -> int:
+    if isinstance(bit_depth, bool) or bit_depth not in PNG_BIT_DEPTHS:
+        raise ArgumentError(
+            f"PNG bit depth must be one of {', '.join(map(str, PNG_BIT_DEPTHS))}, got {bit_depth!r}",
+            file=file,
+            field="bit_depth",
+        )
+    return int(bit_depth)
 
 
 def _check_tonemap(mode: str, file: str | Path | None = None) -> str:
@@ -187,7 +202,8 @@ def read_image(path: str | Path) -> np.ndarray:
     * ``.hdr`` / ``.pic``: Radiance RGBE, decoded by a small NumPy reader (flat and new-style run-length
       scanlines; ``EXPOSURE=`` header values are divided out, as the format specifies).
     * ``.npy``: an array of shape (H, W), (H, W, 3) or (H, W, 4) (alpha is dropped).
-    * ``.png`` / ``.jpg``: 8- or 16-bit, sRGB-decoded to linear; alpha is dropped, not composited.
+    * ``.png`` / ``.jpg``: 1- to 16-bit grey, grey + alpha, palette, RGB, RGBA, decoded to linear at full
+      precision (sRGB, or the power law of a gAMA chunk far from 1/2.2); alpha is dropped, not composited.
 
     Raises
     ------
@@ -253,19 +269,90 @@ def _read_npy(path: Path) -> np.ndarray:
 
 
 def _read_ldr(path: Path) -> np.ndarray:
+    """PNG and JPEG: display-referred codes → linear. 16-bit PNGs go through pypng, because Pillow keeps only
+    grey ones at 16 bits (``convert("RGB")`` drops the low byte of RGB / RGBA / grey + alpha ones)."""
     from PIL import Image
 
+    header = _png_header(path)
+    gamma = None
     try:
-        with Image.open(path) as im:
-            im.load()
-            if im.mode in ("I;16", "I;16L", "I;16B", "I"):
-                encoded = np.asarray(im, dtype=np.float64) / 65535.0
-                encoded = np.repeat(encoded[:, :, None], 3, axis=2)
-            else:
-                encoded = np.asarray(im.convert("RGB"), dtype=np.float64) / 255.0
-    except Exception as exc:  # UnidentifiedImageError, OSError (truncated), DecompressionBombError, ...
+        if header is not None and header[2] == 16:
+            encoded, gamma = _read_png16(path, header)
+        else:
+            with Image.open(path) as im:
+                im.load()
+                gamma = im.info.get("gamma") if "srgb" not in im.info and "icc_profile" not in im.info else None
+                if im.mode in ("I;16", "I;16L", "I;16B", "I"):  # 16-bit grey TIFF-like data Pillow may hand back
+                    encoded = np.asarray(im, dtype=np.float64) / 65535.0
+                    encoded = np.repeat(encoded[:, :, None], 3, axis=2)
+                else:  # a palette with transparency goes through RGBA, as Pillow asks; alpha is dropped after
+                    full = im.convert("RGBA") if im.mode in ("P", "PA") else im.convert("RGB")
+                    encoded = np.asarray(full, dtype=np.float64)[:, :, :3] / 255.0
+    except ImageError:
+        raise
+    except Exception as exc:  # UnidentifiedImageError, OSError (truncated), DecompressionBombError, png errors...
         raise ImageError(f"cannot decode image ({exc})", file=path) from exc
-    return srgb_to_linear(np.clip(encoded, 0.0, 1.0))
+    return _decode_transfer(np.clip(encoded, 0.0, 1.0), gamma)
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+#: Pillow's decompression-bomb threshold, kept for the 16-bit reader too (2 x Image.MAX_IMAGE_PIXELS)
+_MAX_PNG_PIXELS = 2 * 89_478_485
+
+
+def _png_header(path: Path) -> tuple[int, int, int, int] | None:
+    """(width, height, bit depth, colour type) from a PNG's IHDR, or None for other files."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(29)
+    except OSError as exc:
+        raise ImageError(f"cannot read file ({exc.strerror or exc})", file=path) from exc
+    if len(head) < 29 or not head.startswith(_PNG_SIGNATURE) or head[12:16] != b"IHDR":
+        return None
+    width, height = int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+    return width, height, head[24], head[25]
+
+
+def _read_png16(path: Path, header: tuple[int, int, int, int]) -> tuple[np.ndarray, float | None]:
+    """Codes in [0, 1] (H, W, 3) of a 16-bit PNG of any colour type, and its gAMA value unless sRGB/iCCP say
+    otherwise."""
+    import png
+
+    width, height = header[:2]
+    if width * height > _MAX_PNG_PIXELS:
+        raise ImageError(
+            f"{width}x{height} pixels exceed the limit of {_MAX_PNG_PIXELS} (a decompression bomb?)", file=path
+        )
+    reader = png.Reader(filename=str(path))
+    width, height, rows, info = reader.asDirect()  # palette and tRNS expanded, sBIT honoured
+    planes = info["planes"]
+    codes = np.vstack([np.asarray(row, dtype=np.uint16) for row in rows]).reshape(height, width, planes)
+    colour = codes[:, :, :3] if planes >= 3 else np.repeat(codes[:, :, :1], 3, axis=2)  # alpha dropped
+    maximum = float(2 ** info["bitdepth"] - 1)
+    gamma = None if _png_has_colour_space_chunk(path) else info.get("gamma")
+    return colour.astype(np.float64) / maximum, gamma
+
+
+def _png_has_colour_space_chunk(path: Path) -> bool:
+    """True if the PNG declares sRGB or an ICC profile (either overrides gAMA, per the PNG specification)."""
+    data = path.read_bytes()
+    pos = 8
+    while pos + 8 <= len(data):
+        length, kind = int.from_bytes(data[pos : pos + 4], "big"), data[pos + 4 : pos + 8]
+        if kind in (b"sRGB", b"iCCP"):
+            return True
+        if kind == b"IDAT":
+            return False  # colour-space chunks must come before the image data
+        pos += 12 + length
+    return False
+
+
+def _decode_transfer(encoded: np.ndarray, gamma: float | None) -> np.ndarray:
+    """Codes → linear light: sRGB, unless the file carries a gAMA far from sRGB's 1/2.2 (gAMA = 1.0: linear
+    data, as some tools write for data images; 1/1.8: an old Mac gamma) — then its power law, as PNG says."""
+    if gamma is not None and gamma > 0.0 and abs(gamma - 1.0 / 2.2) > 0.01:
+        return encoded ** (1.0 / gamma)
+    return srgb_to_linear(encoded)
 
 
 # --------------------------------------------------------------------------------------- Radiance RGBE
@@ -455,14 +542,17 @@ def check_output_path(path: str | Path, allowed: Iterable[str] = IMAGE_WRITE_EXT
     return p
 
 
-def write_image(path: str | Path, image: np.ndarray, *, exposure: float = 0.0, tonemap: str = "srgb") -> Path:
+def write_image(
+    path: str | Path, image: np.ndarray, *, exposure: float = 0.0, tonemap: str = "srgb", bit_depth: int = 8
+) -> Path:
     """Write an image atomically; the format follows the extension (:data:`IMAGE_WRITE_EXTENSIONS`).
 
     * ``.exr``: float32 R, G, B with lossless ZIP compression (exact round trip).
     * ``.npy``: float32 (H, W, 3) (exact round trip).
     * ``.hdr``: Radiance RGBE (about 1 % relative precision, no negatives).
-    * ``.png``: 8-bit sRGB through :func:`tonemap` with ``exposure`` and ``tonemap``. HDR formats store linear
-      radiance untouched; ``exposure`` and ``tonemap`` are still validated for them so typos are caught.
+    * ``.png``: 8- or 16-bit (``bit_depth``) sRGB through the ``tonemap`` curve after ``exposure``. HDR formats
+      store linear radiance untouched; ``exposure``, ``tonemap`` and ``bit_depth`` are still validated for
+      them so typos are caught.
 
     Parameters
     ----------
@@ -470,9 +560,12 @@ def write_image(path: str | Path, image: np.ndarray, *, exposure: float = 0.0, t
     image : array (H, W, 3) or (H, W)
         Linear radiance; must be finite.
     exposure : float
-        Stops applied before tone mapping (8-bit formats only).
+        Stops applied before tone mapping (PNG only).
     tonemap : {"srgb", "aces"}
-        Tone-mapping curve (8-bit formats only).
+        Tone-mapping curve (PNG only).
+    bit_depth : {8, 16}
+        Bits per channel of a PNG; 16 keeps 1/65535 steps (references, smooth gradients), read back exactly by
+        :func:`read_image`.
 
     Returns
     -------
@@ -490,6 +583,7 @@ def write_image(path: str | Path, image: np.ndarray, *, exposure: float = 0.0, t
     rgb = _as_rgb(image, file=p)
     stops = _check_exposure(exposure, file=p)
     curve = _check_tonemap(tonemap, file=p)
+    depth = _check_bit_depth(bit_depth, file=p)
     ext = _extension(p)
     if ext == ".exr":
         payload = _encode_exr(rgb, p)
@@ -500,7 +594,7 @@ def write_image(path: str | Path, image: np.ndarray, *, exposure: float = 0.0, t
     elif ext == ".hdr":
         payload = _encode_rgbe(rgb)
     else:
-        payload = _encode_png(_tonemap_checked(rgb, stops, curve))
+        payload = _encode_png(_tonemap_checked(rgb, stops, curve, depth))
     atomic_write(p, payload)
     return p
 
@@ -518,11 +612,19 @@ def _encode_exr(rgb: np.ndarray, path: Path) -> bytes:
     return buf.getvalue()
 
 
-def _encode_png(rgb8: np.ndarray) -> bytes:
-    from PIL import Image
-
+def _encode_png(codes: np.ndarray) -> bytes:
+    """uint8 codes through Pillow; uint16 RGB through pypng (Pillow cannot write 16-bit colour PNGs)."""
     buf = io.BytesIO()
-    Image.fromarray(rgb8).save(buf, format="PNG")
+    if codes.dtype == np.uint16:
+        import png
+
+        height, width = codes.shape[:2]
+        rows = codes.reshape(height, width * 3)
+        png.Writer(width, height, greyscale=False, bitdepth=16, compression=6).write(buf, rows)
+    else:
+        from PIL import Image
+
+        Image.fromarray(codes).save(buf, format="PNG")
     return buf.getvalue()
 
 

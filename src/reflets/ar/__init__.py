@@ -3,11 +3,10 @@ with known poses (the test data: real photographs are not available offline)."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
+
+from .. import jsonio
 
 
 def write_json(path: str | Path, data: dict) -> Path:
-    path = Path(path)
-    path.write_text(json.dumps(data, indent=1), encoding="utf-8")
-    return path
+    return jsonio.write(path, data, indent=1)

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import importlib
-import json
 import os
 import platform
 from collections.abc import Callable
 from pathlib import Path
 
+from .. import jsonio
 from ..errors import ArgumentError, OutputError
 
 #: suite name → "module:function"; the function(quick: bool, out_dir: Path) returns (results dict, markdown
@@ -72,7 +72,7 @@ def run_suite(name: str, out_dir: Path, quick: bool = False) -> dict:
         f"\nMachine: {info['cores']} cores, {info['cpu'] or info['platform']}, Python {info['python']}, "
         f"OpenGL: {gl}. Command: `reflets bench {name}{' --quick' if quick else ''}`.\n"
     )
-    (out_dir / f"{name}.json").write_text(json.dumps(results, indent=2))
+    jsonio.write(out_dir / f"{name}.json", results, indent=2)  # strict JSON: a NaN / inf number is null
     (out_dir / f"{name}.md").write_text(markdown)
     print(markdown)
     print(f"wrote {out_dir / (name + '.json')} and {out_dir / (name + '.md')}")

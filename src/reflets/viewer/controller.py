@@ -451,13 +451,12 @@ class ViewerController(Painting):
 
     def save_camera(self, path: str | Path, overwrite: bool = False) -> Path:
         """The current camera as JSON (the scene's ``[camera]`` fields)."""
-        import json
+        from .. import jsonio
 
         path = Path(path)
         if path.exists() and not overwrite:
             raise ArgumentError("exists already; choose another name (nothing was written)", file=path)
-        path.write_text(json.dumps(self.scene.camera.model_dump(), indent=2), encoding="utf-8")
-        return path
+        return jsonio.write(path, self.scene.camera.model_dump(), indent=2)
 
     def release(self) -> None:
         import shutil
