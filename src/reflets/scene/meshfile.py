@@ -7,6 +7,10 @@ built from the uv layout so anisotropic materials have an orientation on any mes
 
 from __future__ import annotations
 
+import codecs
+import functools
+import io
+import re
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +20,96 @@ from reflets.quantities import MAX_MAGNITUDE
 from reflets.scene.meshdata import MeshData
 
 SUPPORTED_EXTENSIONS = (".obj", ".ply", ".gltf", ".glb", ".stl", ".off")
+
+#: fallback order for text without a byte order mark: strict UTF-8, then Windows-1252 (a superset of Latin-1's
+#: printable characters, with ’ € … in 0x80–0x9F), then Latin-1, which maps every byte and so never fails
+TEXT_ENCODINGS = ("utf-8", "cp1252", "latin-1")
+_UTF16_BOMS = ((codecs.BOM_UTF16_LE, "utf-16-le"), (codecs.BOM_UTF16_BE, "utf-16-be"))
+#: the ``end_header`` line of a PLY file with its line break (the header is text whatever the body); anchored at a
+#: line start so that a comment mentioning it does not end the header early
+_PLY_END_HEADER = re.compile(rb"(?:\A|[\r\n])[ \t]*end_header[ \t]*(?:\r?\n|\r)")
+_PLY_ASCII = re.compile(rb"^[ \t]*format[ \t]+ascii\b", re.MULTILINE | re.IGNORECASE)
+
+
+def decode_text(data: bytes) -> str:
+    """Text of a mesh or material file in any common encoding, with LF line endings.
+
+    A UTF-8 byte order mark is dropped (so is a UTF-16 one, with the text decoded as UTF-16); otherwise the
+    first of :data:`TEXT_ENCODINGS` that decodes every byte wins. CRLF and lone CR become LF.
+    """
+    text = None
+    for bom, encoding in _UTF16_BOMS:
+        if data.startswith(bom):
+            try:
+                text = data[len(bom) :].decode(encoding)
+                break
+            except UnicodeDecodeError:
+                pass
+    if text is None:
+        data = data.removeprefix(codecs.BOM_UTF8)
+        for encoding in TEXT_ENCODINGS:
+            try:
+                text = data.decode(encoding)
+                break
+            except UnicodeDecodeError:
+                continue
+    assert text is not None  # latin-1 decodes anything
+    return text.replace("\r\n", "\n").replace("\r", "\n")
+
+
+def _utf8_text(data: bytes) -> bytes:
+    """A text file's bytes as UTF-8 without BOM, with LF line endings (the same object when already so)."""
+    if b"\r" not in data and not data.startswith((codecs.BOM_UTF8, codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        try:
+            data.decode("utf-8")
+            return data
+        except UnicodeDecodeError:
+            pass
+    return decode_text(data).encode("utf-8")
+
+
+def _ply_bytes(data: bytes) -> bytes:
+    """A PLY file with its header as UTF-8/LF; an ASCII body is re-encoded too, a binary one is kept byte for byte."""
+    end = _PLY_END_HEADER.search(data)
+    if end is None:  # not a PLY file: trimesh says so
+        return _utf8_text(data)
+    header = _utf8_text(data[: end.end()])
+    return _utf8_text(data) if _PLY_ASCII.search(header) else header + data[end.end() :]
+
+
+def _stl_bytes(data: bytes) -> bytes:
+    """A binary STL (its length matches the triangle count at byte 80, as trimesh checks) as is; ASCII re-encoded."""
+    if len(data) >= 84 and len(data) - 84 == 50 * int.from_bytes(data[80:84], "little"):
+        return data
+    return _utf8_text(data)
+
+
+#: how each text-based format's bytes reach trimesh: as UTF-8 with LF line endings, so trimesh never has to guess
+#: an encoding (its guess needs the optional charset_normalizer and drops what it cannot decode)
+_TRANSCODE = {".obj": _utf8_text, ".off": _utf8_text, ".ply": _ply_bytes, ".stl": _stl_bytes}
+
+
+@functools.cache
+def _resolver_class(trimesh):
+    """trimesh's file resolver, handing MTL material libraries (read by the OBJ loader) over as UTF-8/LF too."""
+
+    class TextAssetResolver(trimesh.resolvers.FilePathResolver):
+        def get(self, name: str) -> bytes:
+            data = super().get(name)
+            return _utf8_text(data) if name.strip().lower().endswith(".mtl") else data  # textures stay binary
+
+    return TextAssetResolver
+
+
+def _load_trimesh(path: Path, ext: str):
+    """trimesh's object for a mesh file; text formats are decoded here, see :data:`_TRANSCODE`."""
+    import trimesh  # heavy import, only needed by scenes that use mesh files
+
+    if ext not in _TRANSCODE:  # glTF is UTF-8 JSON by specification, GLB binary
+        return trimesh.load(str(path), file_type=ext[1:], process=False)
+    data = _TRANSCODE[ext](path.read_bytes())
+    resolver = _resolver_class(trimesh)(str(path.absolute()))
+    return trimesh.load(io.BytesIO(data), file_type=ext[1:], resolver=resolver, process=False)
 
 
 def _unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -153,6 +247,8 @@ def load_mesh_file(path: str | Path) -> MeshData:
     path : str or Path
         An ``.obj``, ``.ply``, ``.gltf``, ``.glb``, ``.stl`` or ``.off`` file. A glTF scene is flattened
         into one mesh with its node transforms applied; quads and polygons are triangulated by trimesh.
+        Text formats (OBJ and its MTL, ASCII PLY, OFF, ASCII STL) may be UTF-8 (with or without BOM),
+        Windows-1252 or Latin-1 with LF, CRLF or CR line endings: see :func:`decode_text`.
 
     Returns
     -------
@@ -181,7 +277,7 @@ def load_mesh_file(path: str | Path) -> MeshData:
     import trimesh  # heavy import, only needed by scenes that use mesh files
 
     try:
-        parts = _parts(trimesh.load(str(path), file_type=ext[1:], process=False), trimesh)
+        parts = _parts(_load_trimesh(path, ext), trimesh)
     except Exception as exc:  # trimesh raises many types for corrupt files
         reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:200]
         raise SceneError(f"cannot read mesh file: {reason}", file=path) from exc
