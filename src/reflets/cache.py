@@ -14,6 +14,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import threading
 import zipfile
 from collections import OrderedDict
 from collections.abc import Callable
@@ -82,12 +83,14 @@ class Cache:
         self.kind, self._load, self._save, self.memory_budget = kind, load, save, memory_budget
         self._memory: OrderedDict[str, tuple[object, int]] = OrderedDict()
         self._bytes = 0
+        self._lock = threading.RLock()  # renders from several threads share a cache; ``make`` runs outside it
 
     def get(self, key: str, make: Callable[[], object]):
         """The result under ``key``: from memory, else from disk, else ``make()`` (then stored in both)."""
-        if key in self._memory:
-            self._memory.move_to_end(key)
-            return self._memory[key][0]
+        with self._lock:
+            if key in self._memory:
+                self._memory.move_to_end(key)
+                return self._memory[key][0]
         path = cache_dir(self.kind) / f"{key}.npz"
         value = None
         if path.is_file():
@@ -103,12 +106,14 @@ class Cache:
 
     def peek(self, key: str):
         """The result under ``key`` if it is in memory, else None (nothing loaded, nothing made)."""
-        entry = self._memory.get(key)
+        with self._lock:
+            entry = self._memory.get(key)
         return None if entry is None else entry[0]
 
     def clear_memory(self) -> None:
-        self._memory.clear()
-        self._bytes = 0
+        with self._lock:
+            self._memory.clear()
+            self._bytes = 0
 
     @property
     def memory_bytes(self) -> int:
@@ -119,16 +124,19 @@ class Cache:
 
     def _remember(self, key: str, value) -> None:
         size = size_of(value)
-        self._memory[key] = (value, size)
-        self._bytes += size
-        while self._bytes > self.memory_budget and len(self._memory) > 1:
-            _, (_, dropped) = self._memory.popitem(last=False)
-            self._bytes -= dropped
+        with self._lock:
+            if key in self._memory:  # another thread made it meanwhile
+                self._bytes -= self._memory.pop(key)[1]
+            self._memory[key] = (value, size)
+            self._bytes += size
+            while self._bytes > self.memory_budget and len(self._memory) > 1:
+                _, (_, dropped) = self._memory.popitem(last=False)
+                self._bytes -= dropped
 
     def _store(self, path: Path, value) -> None:
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")
+            tmp = path.with_name(f"{path.stem}.{os.getpid()}.{threading.get_ident()}.tmp.npz")
             self._save(value, tmp)
             tmp.replace(path)
         except OSError:

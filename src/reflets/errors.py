@@ -42,12 +42,21 @@ class GLUnavailableError(RefletsError):
     """No OpenGL context can be created (no EGL, no driver, version too old)."""
 
 
+class ContextThreadError(RefletsError):
+    """A renderer (or other GL object) used from a thread other than the one its GL context is current on."""
+
+
 class ShaderError(RefletsError):
     """A GLSL program failed to compile or link; the message maps driver lines back to source files."""
 
 
 class ArgumentError(RefletsError):
     """A command-line or API argument is out of range (image size, method name, sample count)."""
+
+
+class ResourceError(ArgumentError):
+    """A parameter whose estimated memory is more than this machine has available (reflets.resources): refused,
+    by name, before anything is allocated."""
 
 
 #: what reading a damaged or empty .npy / .npz raises (NumPy names none of these as its own): to be caught where a

@@ -135,15 +135,16 @@ def test_the_program_cache_releases_unused_programs_past_its_bound(ctx, monkeypa
 
     spec = ProgramSpec("soak", vertex=DEPTH_PROGRAM.vertex, fragment=DEPTH_PROGRAM.fragment,
                        flags=frozenset({"VARIANT"}))  # fmt: skip
+    cache = programs_module._programs(ctx)
     monkeypatch.setattr(programs_module, "MAX_PROGRAMS", 0)
-    programs_module._trim_cache()  # only the programs something holds remain
-    monkeypatch.setattr(programs_module, "MAX_PROGRAMS", len(programs_module._CACHE) + 3)
+    programs_module._trim_cache(cache)  # only the programs something holds remain
+    monkeypatch.setattr(programs_module, "MAX_PROGRAMS", len(cache) + 3)
     held = get_program(ctx, spec, VARIANT=0)
-    keys = [k for k in programs_module._CACHE if k[1] == spec]
+    keys = [k for k in cache if k[0] == spec]
     for variant in range(1, 8):
         get_program(ctx, spec, VARIANT=variant)  # nobody keeps these
-    remaining = [k for k in programs_module._CACHE if k[1] == spec]
+    remaining = [k for k in cache if k[0] == spec]
     assert keys[0] in remaining  # held: kept, though the least recently used
-    assert len(programs_module._CACHE) <= programs_module.MAX_PROGRAMS
+    assert len(cache) <= programs_module.MAX_PROGRAMS
     assert len(remaining) <= 3
     assert get_program(ctx, spec, VARIANT=0) is held and held.glo > 0

@@ -55,15 +55,16 @@ def soak(edits: int, block: int) -> list[dict]:
     """Run ``edits`` edits and variants; a row (edits so far, RSS, cached programs, GL error flag) per block."""
     import reflets
     from reflets.gpu import get_context
-    from reflets.gpu.programs import _CACHE as PROGRAMS
+    from reflets.gpu.programs import _programs
     from reflets.renderer import Renderer
 
     ctx = get_context()
+    programs = _programs(ctx)
     rows = []
     with warnings.catch_warnings(), Renderer(_scene(1, 32, 0.3), method="auto", size=SIZE) as renderer:
         warnings.simplefilter("ignore", RefletsWarning)  # `forward` on the scratched plane: its base BRDF, said
         renderer.render()
-        rows.append(_row(0, PROGRAMS, ctx))
+        rows.append(_row(0, programs, ctx))
         for k in range(1, edits + 1):
             kind = k % 4
             if kind == 0:  # a scratched material's parameter: new α maps
@@ -78,7 +79,7 @@ def soak(edits: int, block: int) -> list[dict]:
                 reflets.render(_scene(1, 8 + 2 * (k % 200), 0.3), method="forward", size=SIZE)
             if k % block == 0:
                 gc.collect()
-                rows.append(_row(k, PROGRAMS, ctx))
+                rows.append(_row(k, programs, ctx))
     return rows
 
 

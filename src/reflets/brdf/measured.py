@@ -330,15 +330,16 @@ def write_merl(path: str | Path, brdf_fn) -> Path:
 
 # ------------------------------------------------------------------------------------------- textures
 
-_TEXTURES: dict[tuple[int, str, str], tuple[tuple[int, int], object]] = {}
-
 
 def _texture(ctx, table: MerlTable, precision: str):
     """The table as a 3D texture (x = φd, y = θd, z = θh), created once per (context, file, precision)."""
     import moderngl
 
-    key = (id(ctx), str(table.path), precision)
-    cached = _TEXTURES.get(key)
+    from ..gpu.context import context_store
+
+    textures = context_store(ctx, "merl-textures")
+    key = (str(table.path), precision)
+    cached = textures.get(key)
     if cached is not None and cached[0] == table.stamp:
         return cached[1]
     if cached is not None:
@@ -350,7 +351,7 @@ def _texture(ctx, table: MerlTable, precision: str):
     n_h, n_d, n_p = MERL_SHAPE
     texture = ctx.texture3d((n_p, n_d, n_h), 3, data.tobytes(), dtype=dtype)
     texture.filter = (moderngl.NEAREST, moderngl.NEAREST)  # read by texelFetch: the shader interpolates
-    _TEXTURES[key] = (table.stamp, texture)
+    textures[key] = (table.stamp, texture)
     return texture
 
 

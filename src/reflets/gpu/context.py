@@ -6,17 +6,22 @@
 - ``nvidia``: only NVIDIA's EGL vendor library; an error if it is missing;
 - ``llvmpipe``: Mesa's software rasteriser (what CI and machines without a GPU use).
 
-Everything GPU in reflets takes its context from :func:`get_context`, so one process holds one context — the
-EGL one made here, or one a window made and handed over (:func:`use_context`, the viewer).
+Everything GPU in reflets takes its context from :func:`get_context`. A GL context is current on one thread at a
+time, so each thread that renders gets its own headless EGL context, made on its first call and released when
+the thread ends; a window's context (:func:`use_context`, the viewer) serves only the thread that handed it
+over. Four threads rendering at once therefore draw in four contexts, with nothing shared but NumPy data and the
+content caches (which lock); objects tied to one context (compiled programs, textures kept across renders) live
+in that context's :func:`context_store`, dropped with it.
 """
 
 from __future__ import annotations
 
 import os
-from functools import cache
+import threading
+import weakref
 from pathlib import Path
 
-from ..errors import GLUnavailableError
+from ..errors import ContextThreadError, GLUnavailableError
 
 GL_REQUIRE = 430  # compute shaders, SSBOs, std430 — used by later techniques
 CHOICES = ("auto", "nvidia", "llvmpipe")
@@ -68,31 +73,112 @@ def _prepare_environment(choice: str) -> None:
         os.environ["__EGL_VENDOR_LIBRARY_FILENAMES"] = nvidia
 
 
-_window_context = None
+_window = None  # (context, thread) a window handed over
+_local = threading.local()  # this thread's EGL context, in a holder whose finaliser releases it
+_lock = threading.RLock()
+_stores: dict[int, dict[str, object]] = {}  # id(context) → named caches of that context's GL objects
+_environment_ready = False
 
 
 def use_context(ctx) -> None:
-    """Make ``ctx`` — a context something else created and made current, e.g. a viewer's window — the process's
-    context: every renderer created afterwards draws in it (programs are cached per context). The headless EGL
-    context, if one was made, stays but is no longer handed out. ``None`` goes back to it."""
-    global _window_context
+    """Make ``ctx`` — a context something else created and made current on this thread, e.g. a viewer's window —
+    this thread's context: every renderer it creates afterwards draws in it (programs are cached per context).
+    Other threads keep their own EGL contexts. ``None`` goes back to the EGL context."""
+    global _window
     if ctx is not None and ctx.version_code < GL_REQUIRE:
         raise GLUnavailableError(
             f"the context offers OpenGL {ctx.version_code / 100:.1f}; reflets needs {GL_REQUIRE / 100:.1f}"
         )
-    _window_context = ctx
+    if _window is not None and ctx is None:
+        forget_context(_window[0])
+    _window = None if ctx is None else (ctx, threading.current_thread())
 
 
 def get_context():
-    """The process's moderngl context: the one given to :func:`use_context`, else the standalone EGL context
-    (created on first use)."""
-    return _window_context if _window_context is not None else _egl_context()
+    """This thread's moderngl context: the one it gave to :func:`use_context`, else its own EGL context (made on
+    first use, released when the thread ends)."""
+    window = _window
+    if window is not None and window[1] is threading.current_thread():
+        return window[0]
+    holder = getattr(_local, "holder", None)
+    if holder is None:
+        holder = _Holder(_egl_context())
+        _local.holder = holder
+    return holder.ctx
 
 
-@cache
+def context_store(ctx, name: str, factory=dict):
+    """A container (``factory()``) for caching GL objects of ``ctx`` (e.g. ``"programs"``): each context has its
+    own, so an object is never used, or released, in a context that does not own it; dropped with the context."""
+    with _lock:
+        stores = _stores.setdefault(id(ctx), {})
+        if name not in stores:
+            stores[name] = factory()
+        return stores[name]
+
+
+def forget_context(ctx) -> None:
+    """Drop the caches of a context that is about to go (its GL objects go with it)."""
+    with _lock:
+        _stores.pop(id(ctx), None)
+
+
+def owner_thread(ctx) -> threading.Thread | None:
+    """The thread ``ctx`` is current on (None once that thread has ended)."""
+    window = _window
+    if window is not None and window[0] is ctx:
+        return window[1]
+    with _lock:
+        return _owners.get(id(ctx))
+
+
+def check_thread(ctx, what: str) -> None:
+    """Raise a :class:`ContextThreadError` unless ``ctx`` can be driven from the calling thread."""
+    owner = owner_thread(ctx)
+    if owner is threading.current_thread():
+        return
+    here = threading.current_thread().name
+    if owner is None:
+        raise ContextThreadError(
+            f"{what} drew in a GL context whose thread has ended; make a new one in thread '{here}'", field="thread"
+        )
+    raise ContextThreadError(
+        f"{what} belongs to thread '{owner.name}' (its GL context is current there) and cannot be used from thread "
+        f"'{here}'; make one per thread, or call reflets.render(), which takes the calling thread's context",
+        field="thread",
+    )
+
+
+_owners: dict[int, threading.Thread] = {}
+
+
+class _Holder:
+    """Owns one thread's EGL context; the thread's local storage holds it, so it goes when the thread ends."""
+
+    def __init__(self, ctx):
+        self.ctx = ctx
+        with _lock:
+            _owners[id(ctx)] = threading.current_thread()
+        weakref.finalize(self, _release, ctx)
+
+
+def _release(ctx) -> None:
+    with _lock:
+        _owners.pop(id(ctx), None)
+        forget_context(ctx)
+    try:
+        ctx.release()
+    except Exception:  # the context went with its thread already
+        pass
+
+
 def _egl_context():
+    global _environment_ready
     choice = gl_choice()
-    _prepare_environment(choice)
+    with _lock:
+        if not _environment_ready:
+            _prepare_environment(choice)
+            _environment_ready = True
     import moderngl
 
     try:

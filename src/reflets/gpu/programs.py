@@ -9,7 +9,7 @@ Two include forms are understood:
 Each file's text is preceded by ``#line 1 K`` where K numbers the file, so a driver message such as
 ``0:12(3): error: …`` (Mesa) or ``0(12) : error C…`` (NVIDIA) is rewritten to ``forward.frag:12: error: …``.
 Flags become ``#define``s right after ``#version``; a flag the program does not declare is an error.
-Compiled programs are cached per (context, stages, slots, flags).
+Compiled programs are cached per context (:func:`~reflets.gpu.context.context_store`) by (stages, slots, flags).
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from functools import cache
 from importlib import resources
 
 from ..errors import ShaderError
+from .context import context_store
 
 GLSL_VERSION = "#version 430 core"
 #: fine derivatives (dFdxFine: a 2×2 quad's exact neighbours; core from GLSL 4.50): enabled where the driver has
@@ -154,22 +155,26 @@ class ProgramSpec:
     constants: tuple[tuple[str, str], ...] = ()
 
 
-_CACHE: OrderedDict[tuple, object] = OrderedDict()
-#: compiled programs kept past this many are released, least recently used first, when nothing else holds them
-#: (a program compiled for each light count or material flag combination would otherwise accumulate for a whole
-#: session: ~1.7 MB of generated code each on llvmpipe)
+#: compiled programs kept past this many (per context) are released, least recently used first, when nothing else
+#: holds them (a program compiled for each light count or material flag combination would otherwise accumulate for
+#: a whole session: ~1.7 MB of generated code each on llvmpipe)
 MAX_PROGRAMS = 48
 
 
-def _trim_cache() -> None:
+def _programs(ctx) -> OrderedDict:
+    """The compiled programs of ``ctx`` (each context, one per rendering thread, has its own)."""
+    return context_store(ctx, "programs", OrderedDict)
+
+
+def _trim_cache(cache: OrderedDict) -> None:
     """Release least recently used programs over MAX_PROGRAMS that no technique, vertex array or caller holds
     (CPython's reference count: the cache's own reference and this loop's are the only ones)."""
-    for key in list(_CACHE):
-        if len(_CACHE) <= MAX_PROGRAMS:
+    for key in list(cache):
+        if len(cache) <= MAX_PROGRAMS:
             return
-        program = _CACHE[key]
+        program = cache[key]
         if sys.getrefcount(program) <= 3:  # the cache, ``program`` and getrefcount's argument
-            del _CACHE[key]
+            del cache[key]
             program.release()
         del program
 
@@ -186,10 +191,11 @@ def get_program(ctx, spec: ProgramSpec, *, slots: dict[str, str] | None = None, 
             f"program {spec.name}: undeclared flag(s) {', '.join(unknown)}; declared: "
             f"{', '.join(sorted(spec.flags)) or 'none'}"
         )
-    key = (id(ctx), spec, tuple(sorted((slots or {}).items())), tuple(sorted(flags.items())))
-    if key in _CACHE:
-        _CACHE.move_to_end(key)
-        return _CACHE[key]
+    cache = _programs(ctx)
+    key = (spec, tuple(sorted((slots or {}).items())), tuple(sorted(flags.items())))
+    if key in cache:
+        cache.move_to_end(key)
+        return cache[key]
     stages = {}
     all_files: dict[str, list[str]] = {}
     for stage in ("vertex", "fragment", "geometry", "compute"):
@@ -216,8 +222,8 @@ def get_program(ctx, spec: ProgramSpec, *, slots: dict[str, str] | None = None, 
         raise ShaderError(
             f"program {spec.name} failed to build: " + map_log(text, files).strip().replace("\n", " | ")
         ) from exc
-    _CACHE[key] = program
-    _trim_cache()
+    cache[key] = program
+    _trim_cache(cache)
     return program
 
 

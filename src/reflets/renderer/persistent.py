@@ -12,6 +12,10 @@ by what they invalidate:
 After any sequence of edits the image is the one-shot ``reflets.render()`` of the edited scene (tested). Progressive
 methods (``mc``, ``scratches``) go on accumulating frames across ``render()`` calls while nothing changes, and
 restart after an edit, a new seed or a new spp.
+
+A Renderer draws in the GL context of the thread that made it (``reflets.gpu.context``: one per thread), so it is
+used from that thread; from another, ``render``, ``set_camera`` and ``release`` raise
+:class:`~reflets.errors.ContextThreadError` naming the owning thread. ``reflets.render()`` works from any thread.
 """
 
 from __future__ import annotations
@@ -47,7 +51,8 @@ class Renderer:
         self.scene = as_scene(scene)
         self.size = check_size(size)
         self.method = method or self.scene.method or DEFAULT_METHOD
-        self._technique = get_technique(self.method)(get_context(), **params)
+        self._ctx = get_context()
+        self._technique = get_technique(self.method)(self._ctx, **params)
         self._stale = True  # the technique must prepare (again) before the next frame
         self._accumulated: tuple | None = None  # progressive: (key, float64 sum, frames)
         self.stats: dict[str, float] = {"prepare_ms": 0.0, "frame_ms": 0.0, "frames": 0, "prepares": 0}
@@ -63,6 +68,7 @@ class Renderer:
         check_spp(spp)
         if self._technique is None:
             raise ArgumentError("this Renderer was released", field="render")
+        self._check_thread()
         if self._stale:
             self._prepare()
         t0 = time.perf_counter()
@@ -95,7 +101,10 @@ class Renderer:
         """Change camera fields (``position``, ``look_at``, ``up``, ``fov_y``, ``size``)."""
         data = self._scene_dict()
         data["camera"] = {**data["camera"], **fields}
-        self.scene = self._validated(data)
+        scene = self._validated(data)
+        if not self._stale:
+            self._check_thread()
+        self.scene = scene
         self._accumulated = None
         if not self._stale and not self._technique.set_camera(self.scene.camera):
             self._stale = True
@@ -132,6 +141,7 @@ class Renderer:
     def release(self) -> None:
         """Free the GPU resources (the renderer cannot draw afterwards)."""
         if self._technique is not None:
+            self._check_thread()
             self._technique.release()
             self._technique = None
 
@@ -142,6 +152,11 @@ class Renderer:
         self.release()
 
     # ------------------------------------------------------------------ internals
+    def _check_thread(self) -> None:
+        from ..gpu.context import check_thread
+
+        check_thread(self._ctx, "this Renderer")
+
     def _prepare(self) -> None:
         t0 = time.perf_counter()
         self._technique.prepare(self.scene)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 
 import numpy as np
@@ -14,22 +15,26 @@ from .model import FileMesh, MeshBase, Scene
 #: whose description changed are built again); bounded, least recently used first out
 MESH_CACHE_ENTRIES = 64
 _MESH_CACHE: OrderedDict[tuple, MeshData] = OrderedDict()
+_MESH_LOCK = threading.Lock()  # renders from several threads share the cache
 
 
 def mesh_data(scene: Scene, index: int) -> MeshData:
     """World-space triangles of ``scene.mesh[index]`` (procedural shape or file, transform applied); the same
     description (files by path, size and modification time) gives the same cached, read-only object."""
     key = _mesh_key(scene, index)
-    if key is not None and key in _MESH_CACHE:
-        _MESH_CACHE.move_to_end(key)
-        return _MESH_CACHE[key]
-    data = _build_mesh_data(scene, index)
+    if key is not None:
+        with _MESH_LOCK:
+            if key in _MESH_CACHE:
+                _MESH_CACHE.move_to_end(key)
+                return _MESH_CACHE[key]
+    data = _build_mesh_data(scene, index)  # outside the lock: two threads may build the same mesh once each
     if key is not None:
         for array in (data.positions, data.normals, data.tangents, data.uvs, data.indices):
             array.flags.writeable = False
-        _MESH_CACHE[key] = data
-        while len(_MESH_CACHE) > MESH_CACHE_ENTRIES:
-            _MESH_CACHE.popitem(last=False)
+        with _MESH_LOCK:
+            _MESH_CACHE[key] = data
+            while len(_MESH_CACHE) > MESH_CACHE_ENTRIES:
+                _MESH_CACHE.popitem(last=False)
     return data
 
 
