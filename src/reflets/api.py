@@ -31,10 +31,11 @@ def render(
         gives s×s anti-aliasing; one frame of ``samples`` for ``mc``)
     params : technique parameters (e.g. ``area_samples=16`` for "forward")
     """
+    from .gpu.context import get_context, turn
     from .renderer import Renderer
 
     spp = check_spp(spp)
-    with Renderer(scene, method=method, size=size, **params) as renderer:
+    with turn(get_context()), Renderer(scene, method=method, size=size, **params) as renderer:
         return renderer.render(seed=seed, spp=spp)
 
 

@@ -48,6 +48,26 @@ def _params(items: list[str]) -> dict[str, object]:
     return out
 
 
+def _check_render_memory(out: Path, size: tuple[int, int]) -> None:
+    """Refuse, before rendering, an image whose render and write would not fit in memory (reflets.resources):
+    width · height · (a frame's bytes per sample at 1 spp + the format's writing bytes per pixel). Memory the
+    render frees is not all returned before the write (a 4096² PNG: measured 155 B per pixel at the peak, this
+    says 192); a larger spp is checked by the technique, before its target is made."""
+    from .imageio import WRITE_BYTES_PER_PIXEL
+    from .resources import check, fitting_size
+    from .techniques.forward import FRAME_BYTES_PER_SAMPLE
+
+    width, height = size
+    per_pixel = FRAME_BYTES_PER_SAMPLE + WRITE_BYTES_PER_PIXEL.get(out.suffix.lower(), 112)
+    check(
+        "size",
+        width * height * per_pixel,
+        value=f"{width}x{height}",
+        what=f"{width * height:,} pixels × {per_pixel} B: rendering, then writing {out.suffix.lower()}",
+        fits=lambda budget: fitting_size(width, height, per_pixel, budget),
+    )
+
+
 def cmd_render(args) -> int:
     from .api import render
     from .arguments import as_scene
@@ -57,6 +77,7 @@ def cmd_render(args) -> int:
     check_output_path(out, IMAGE_WRITE_EXTENSIONS)
     size = _size(args.size) if args.size else None
     scene = as_scene(args.scene)
+    _check_render_memory(out, size or tuple(scene.camera.size))
     image = render(scene, method=args.method, size=size, seed=args.seed, spp=args.spp, **_params(args.param))
     write_image(out, image, exposure=args.exposure, tonemap=args.tonemap, bit_depth=args.bit_depth)
     print(f"wrote {out} ({image.shape[1]}x{image.shape[0]})")
@@ -725,6 +746,14 @@ def main(argv: list[str] | None = None) -> int:
         if args.debug:
             raise
         print(f"reflets: error: {exc}", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except MemoryError as exc:  # what no estimate foresaw (reflets.resources checks the parameters that multiply)
+        if args.debug:
+            raise
+        print(
+            f"reflets: error: out of memory ({exc or 'an allocation failed'}); lower the size, spp or parameters",
+            file=sys.stderr,
+        )
         return EXIT_USER_ERROR
     except KeyboardInterrupt:
         print("reflets: interrupted", file=sys.stderr)

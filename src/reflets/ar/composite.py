@@ -29,7 +29,7 @@ from ..reference.geometry import MESHES, SceneGeometry
 from ..renderer import Renderer
 from ..scene import Scene, load_dict
 from ..scene.camera import pixel_rays, projection_matrix
-from ..scene.geometry import clip_planes
+from ..scene.geometry import bounding_boxes, camera_range
 from ..scene.model import Camera
 from ..scene.transform import look_at
 from . import capture
@@ -203,7 +203,7 @@ class Compositor:
         t2 = time.perf_counter()
         diffuse = vertex_diffuse(self.geometry, self.objects, cube, self.occlusion, self.face_weights)
         cam = Camera(**camera)
-        near, far = clip_planes(np.asarray(cam.position, np.float64), self.geometry.positions)
+        near, far = camera_range(cam, bounding_boxes([self.geometry.positions]))
         view_proj = projection_matrix(cam, *cam.size, near, far) @ look_at(cam.position, cam.look_at, cam.up)
         rgba = render_object(self.geometry, self.objects, cube, diffuse, view_proj, cam.position, tuple(cam.size))
         timings["shading_ms"] = 1e3 * (time.perf_counter() - t2)

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..brdf.base import blinn_phong_exponent
 from ..errors import ArgumentError
-from ..gpu import GLObjects, HDRTarget, ProgramSpec, get_context, get_program, set_uniforms
+from ..gpu import GLObjects, HDRTarget, ProgramSpec, depth, get_context, get_program, set_uniforms
 from ..scene import Scene
 from ..scene.geometry import mesh_data
 from . import capture
@@ -118,25 +118,31 @@ def render_object(geometry, scene, cube, diffuse, view_proj, eye, size) -> np.nd
         ctx.disable(ctx.CULL_FACE)
         set_uniforms(program, {"u_view_proj": view_proj.T.astype(np.float32).tobytes(), "u_environment": 0,
                                "u_eye": tuple(float(c) for c in eye)})  # fmt: skip
-        for index, name in enumerate(geometry.material):
-            _, ks, exponent = phong_terms(scene, name)
-            triangles = geometry.faces[np.all(geometry.mesh_of_vertex[geometry.faces] == index, axis=1)]
-            set_uniforms(program, {"u_ks": tuple(ks), "u_level": float(capture.specular_level(exponent, n))})
-            buffers = [
-                owned.own(ctx.buffer(np.ascontiguousarray(a, np.float32).tobytes()))
-                for a in (geometry.positions, geometry.normals, diffuse)
-            ]
-            indices = owned.own(ctx.buffer(np.ascontiguousarray(triangles, np.int32).tobytes()))
-            vao = owned.own(ctx.vertex_array(
-                program, [(buffers[0], "3f", "in_position"), (buffers[1], "3f", "in_normal"),
-                          (buffers[2], "3f", "in_diffuse")], index_buffer=indices, index_element_size=4))  # fmt: skip
-            vao.render()
+        with depth.camera_depth(ctx):
+            _draw_meshes(ctx, program, owned, geometry, scene, diffuse, n)
         return target.read(components=4)
     finally:
         ctx.disable(ctx.DEPTH_TEST)
         ctx.disable_direct(_SEAMLESS)
         owned.release()
         target.release()
+
+
+def _draw_meshes(ctx, program, owned, geometry, scene, diffuse, n: int) -> None:
+    """Each material's triangles with its Phong terms (buffers owned by ``owned``)."""
+    for index, name in enumerate(geometry.material):
+        _, ks, exponent = phong_terms(scene, name)
+        triangles = geometry.faces[np.all(geometry.mesh_of_vertex[geometry.faces] == index, axis=1)]
+        set_uniforms(program, {"u_ks": tuple(ks), "u_level": float(capture.specular_level(exponent, n))})
+        buffers = [
+            owned.own(ctx.buffer(np.ascontiguousarray(a, np.float32).tobytes()))
+            for a in (geometry.positions, geometry.normals, diffuse)
+        ]
+        indices = owned.own(ctx.buffer(np.ascontiguousarray(triangles, np.int32).tobytes()))
+        vao = owned.own(ctx.vertex_array(
+            program, [(buffers[0], "3f", "in_position"), (buffers[1], "3f", "in_normal"),
+                      (buffers[2], "3f", "in_diffuse")], index_buffer=indices, index_element_size=4))  # fmt: skip
+        vao.render()
 
 
 def ambient(cube) -> np.ndarray:

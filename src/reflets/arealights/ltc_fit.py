@@ -86,6 +86,7 @@ import numpy as np
 
 from ..brdf import MATERIALS, Material
 from ..errors import ArgumentError
+from ..resources import check, largest_fitting
 
 FORMAT_VERSION = 2
 #: versions :meth:`LtcTable.load` reads (version 1: the clamped cosine only, no ``power_weight``)
@@ -803,11 +804,32 @@ def _summary(error: np.ndarray) -> dict:
     }
 
 
+#: bytes a row of fits holds per material and fit direction (k² BRDF samples + n_uniform directions): the
+#: directions, weights and densities of every simplex point (measured 4.6 MB per material at the default
+#: 32² + 512, size 16, 32 and 64)
+FIT_BYTES_PER_DIRECTION = 3200
+
+
+def fit_bytes(size: int, settings: FitSettings | None = None) -> int:
+    """Peak bytes of :func:`fit_family` at ``size`` × ``size`` cells: a row fits all ``size`` roughnesses at once,
+    size · (k² + n_uniform) · FIT_BYTES_PER_DIRECTION, plus the tables (size² cells, 12 float64 each)."""
+    s = settings or FitSettings()
+    return size * (s.k * s.k + s.n_uniform) * FIT_BYTES_PER_DIRECTION + 96 * size * size
+
+
 def fit_family(name: str, size: int = DEFAULT_SIZE, params: dict | None = None, settings=None, progress=None):
     """2-D table (view angle × roughness) of a family in :data:`FAMILIES`; ``params`` set the family's other
-    parameters (e.g. masking = "correlated"); their roughness parameter must not be among them."""
+    parameters (e.g. masking = "correlated"); their roughness parameter must not be among them. ``size`` is
+    checked against the available memory first (:func:`fit_bytes`)."""
     family = FAMILIES[name]
     params = dict(params or {})
+    check(
+        "size",
+        fit_bytes(size, settings),
+        value=size,
+        what=f"{size} roughnesses fitted at once per view angle",
+        fits=lambda budget: largest_fitting(lambda n: fit_bytes(n, settings), 1, size, budget),
+    )
     alpha = alpha_of(np.linspace(0.0, 1.0, size), family.alpha_min)
     materials = [family.material(float(a), params) for a in alpha]
     start = time.perf_counter()

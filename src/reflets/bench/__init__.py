@@ -31,6 +31,7 @@ SUITES: dict[str, str] = {
     "ar": "reflets.bench.ar:bench_ar",
     "ar-loop": "reflets.bench.ar:bench_ar_loop",
     "soak": "reflets.bench.soak:bench_soak",
+    "threads": "reflets.bench.threads:bench_threads",
 }
 
 

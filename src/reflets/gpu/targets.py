@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import moderngl
 import numpy as np
+
+from ..errors import ArgumentError
+from .depth import CLEAR, float_depth_texture
 
 
 class HDRTarget:
@@ -12,13 +16,20 @@ class HDRTarget:
         self.ctx = ctx
         self.size = (int(width), int(height))
         self.color = ctx.texture(self.size, 4, dtype="f4")
-        self.depth = ctx.depth_texture(self.size)
-        self.fbo = ctx.framebuffer(color_attachments=[self.color], depth_attachment=self.depth)
+        self.depth = float_depth_texture(ctx, self.size)  # reversed-Z: camera passes draw in it (gpu.depth)
+        try:
+            self.fbo = ctx.framebuffer(color_attachments=[self.color], depth_attachment=self.depth)
+        except moderngl.Error as exc:  # the driver could not allocate it (llvmpipe: at most 1 GB per texture)
+            release_objects(ctx, [self.color, self.depth])
+            raise ArgumentError(
+                f"this GL driver cannot make a {width}x{height} float32 target ({exc}); lower the size or the spp",
+                field="size",
+            ) from None
 
     def use(self, clear: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)) -> None:
         self.fbo.use()
         self.ctx.viewport = (0, 0, *self.size)
-        self.fbo.clear(*clear, depth=1.0)
+        self.fbo.clear(*clear, depth=CLEAR)
 
     def bind(self) -> None:
         """Draw into this target without clearing it (a composed frame's later passes)."""

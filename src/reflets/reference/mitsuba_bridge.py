@@ -61,7 +61,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ArgumentError, RefletsError, SceneError
-from ..scene.geometry import clip_planes, mesh_data
+from ..scene.geometry import bounding_boxes, camera_range, clip_planes, mesh_data
 from ..scene.lightmask import load_mask
 from ..scene.model import (
     DirectionalLight,
@@ -319,14 +319,15 @@ def _environment_emitter(scene: Scene, light: EnvironmentLight, workdir: Path) -
     return {"type": "envmap", "filename": str(path), "scale": 1.0, "to_world": _transform(m)}
 
 
-def _scene_points(scene: Scene, meshes: list[np.ndarray]) -> np.ndarray:
+def _scene_point_sets(scene: Scene, meshes: list[np.ndarray]) -> list[np.ndarray]:
+    """Each mesh's vertices, each light's position or corners."""
     pts = list(meshes)
     for light in scene.light:
         if isinstance(light, PointLight):
             pts.append(np.asarray([light.position], dtype=np.float64))
         elif isinstance(light, (QuadLight, PolygonLight)):
             pts.append(light.polygon())
-    return np.concatenate(pts, axis=0) if pts else np.zeros((0, 3))
+    return pts
 
 
 # ------------------------------------------------------------------------------------------------- API
@@ -428,13 +429,18 @@ def to_mitsuba_dict(
     cam = scene.camera
     if cam.pixel_aspect != 1.0:
         raise SceneError("Mitsuba 3's perspective camera has square pixels only", field="camera.pixel_aspect")
-    near, far = clip_planes(np.asarray(cam.position, dtype=np.float64), _scene_points(scene, positions))
+    point_sets = _scene_point_sets(scene, positions)
+    near, far = camera_range(cam, bounding_boxes(point_sets))  # the real-time camera's near plane (and far)
+    if far is None:  # none: beyond every point
+        points = np.concatenate(point_sets) if point_sets else np.zeros((0, 3))
+        _, extent = clip_planes(np.asarray(cam.position, dtype=np.float64), points)
+        far = max(2.0 * extent, 10.0 * near)
     out["sensor"] = {
         "type": "perspective",
         "fov": float(cam.fov_y),
         "fov_axis": "y",
         "near_clip": float(near),
-        "far_clip": float(max(2.0 * far, 10.0 * near)),
+        "far_clip": float(far),
         "to_world": _transform(look_at_matrix(cam.position, cam.look_at, cam.up)),
         # Mitsuba moves the principal point the other way (measured: tests/scene/test_camera_intrinsics.py)
         "principal_point_offset_x": -float(cam.principal_offset[0]),

@@ -61,7 +61,7 @@ def _volumetric_material(material: dict) -> dict:
 
 
 #: camera fields at their defaults (added after references were stored: the same image)
-_CENTRED_CAMERA = (("principal_offset", [0.0, 0.0]), ("pixel_aspect", 1.0))
+_CENTRED_CAMERA = (("principal_offset", [0.0, 0.0]), ("pixel_aspect", 1.0), ("near", None), ("far", None))
 
 
 def save(path: Path, image, digest: str, description: dict, seconds: float) -> None:

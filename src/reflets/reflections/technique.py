@@ -36,9 +36,10 @@ import numpy as np
 from pydantic import Field
 
 from ..errors import ArgumentError
-from ..gpu import ProgramSpec, get_program, release_objects, set_uniforms
+from ..gpu import ProgramSpec, depth, get_program, release_objects, set_uniforms
+from ..resources import check, largest_fitting
 from ..scene.emitters import polygon_normal
-from ..scene.geometry import bounding_sphere
+from ..scene.geometry import bounding_sphere, mesh_data
 from ..scene.lightmask import quad_uv
 from ..scene.meshdata import MeshData
 from ..scene.model import CylinderMesh, PlaneMesh, PolygonLight, QuadLight, Scene, SphereMesh, TorusMesh
@@ -179,6 +180,41 @@ def emitter_mesh(light: QuadLight | PolygonLight) -> MeshData:
     )
 
 
+#: what drawing the reflected meshes adds, whatever their size (llvmpipe's binned scene is bounded)
+RASTER_BYTES = 64_000_000
+
+
+def subdivision_bytes(meshes: list[tuple[int, int, int]], reflectors: int) -> int:
+    """Peak bytes ``Fermat.prepare`` allocates for the reflected meshes, each (T triangles, N vertices, split k),
+    drawn once per reflector — an upper bound from the arrays it makes. A mesh split k > 1 has
+    V = T (k + 1)(k + 2) / 2 vertices (shared edges duplicated per triangle) and F = T k² triangles; k ≤ 1 draws
+    the mesh itself (V = N, F = T, nothing new in NumPy). In bytes:
+
+    - R = 48 V + 12 F: the subdivided ``MeshData`` kept (float32 position 12, normal 12, tangent 16, uv 8; uint32
+      indices 12 per triangle);
+    - S = max(164 V + 24 F, 140 V + 36 F) + 96 T + 64 (k + 1)²: the peak of ``MeshData.subdivided``, its result
+      included (float64 interpolated attributes 88 V, handedness 4 V, int64 indices 24 F, the float64 tangent +
+      handedness 32 V before the float32 copies; int64 corners and one attribute's float64 corner values per
+      triangle; the barycentric grid) — tracemalloc measures 206–209 B per vertex where this gives 208–231;
+    - G = 48 V + 12 F per reflector: the vertex and index buffers the GL driver keeps (llvmpipe copies them);
+    - an upload's transients beyond its buffers: max(48 V − 12 F, 12 F) (the interleaved array and its bytes);
+    - drawing them: RASTER_BYTES (llvmpipe bins a bounded scene: measured ≤ 51 MB more at any k).
+
+    The peak is the larger of the subdivision phase, max over j of Σ_{i<j} R_i + S_j (meshes split in order), and
+    Σ R + reflectors · Σ G + max(the largest upload's transients, RASTER_BYTES). Calibrated on the teapot scene:
+    estimate / measured growth of the peak resident memory over k = 1 is 1.31 / 1.16 / 1.04 / 1.02 / 1.01 at
+    k = 10 / 20 / 40 / 60 / 80 (90 / 159 / 443 / 978 / 1,721 MB estimated)."""
+    kept = phase_a = upload = buffers = 0
+    for t, n, k in meshes:
+        v, f = (t * (k + 1) * (k + 2) // 2, t * k * k) if k > 1 else (n, t)
+        if k > 1:
+            phase_a = max(phase_a, kept + max(164 * v + 24 * f, 140 * v + 36 * f) + 96 * t + 64 * (k + 1) ** 2)
+            kept += 48 * v + 12 * f
+        buffers += 48 * v + 12 * f
+        upload = max(upload, 48 * v - 12 * f, 12 * f)
+    return max(phase_a, kept + reflectors * buffers + max(upload, RASTER_BYTES))
+
+
 class FermatParams(ForwardParams):
     """Parameters of ``fermat``."""
 
@@ -218,6 +254,7 @@ class Fermat(Forward):
             raise ArgumentError(
                 "the fermat method needs a mesh with reflector = true (and a mirror material)", field="mesh"
             )
+        self._check_memory(scene)
         super().prepare(scene)
         ctx = self.ctx
         self._lobes = ScratchLobes(self.prepared, scene)  # reflected scratched meshes: their lobes, default sampling
@@ -267,6 +304,35 @@ class Fermat(Forward):
             vao = ctx.vertex_array(program, [])
             self._objects.append(vao)
             self._composites.append((program, vao, material.uniforms(), size))
+
+    def _check_memory(self, scene: Scene) -> None:
+        """Refuse a ``subdivide`` whose reflected meshes would not fit in the available memory (reflets.resources:
+        one line naming it, the estimate of :func:`subdivision_bytes`, the limit and the largest k that fits),
+        before anything is allocated: the meshes come from the content-keyed cache the prepared scene reads."""
+        meshes = [mesh_data(scene, i) for i in range(len(scene.mesh))]
+        reflectors = [i for i, mesh in enumerate(scene.mesh) if mesh.reflector]
+        centres = [bounding_sphere(meshes[i].positions.astype(np.float64))[0] for i in reflectors]
+        reflected = [data for i, data in enumerate(meshes) if i not in reflectors]
+        reflected += [emitter_mesh(light) for light in scene.light if isinstance(light, QuadLight | PolygonLight)]
+        counts = [(data.n_triangles, data.n_vertices, self._subdivision(data, centres)) for data in reflected]
+        if not counts:
+            return
+        vertices = sum(t * (k + 1) * (k + 2) // 2 if k > 1 else n for t, n, k in counts)
+
+        def fits(budget: int) -> int | None:
+            def estimate(k: int) -> int:
+                return subdivision_bytes([(t, n, k) for t, n, _ in counts], len(reflectors))
+
+            return largest_fitting(estimate, 1, max(k for _, _, k in counts), budget)
+
+        check(
+            "subdivide",
+            subdivision_bytes(counts, len(reflectors)),
+            value=self.params.subdivide,
+            what=f"{vertices:,} reflected vertices, drawn for {len(reflectors)} reflector(s)",
+            fits=fits,
+            advice="lower it" if self.params.subdivide != "auto" else "raise max_angle, or give subdivide = k",
+        )
 
     def _subdivision(self, data: MeshData, centres: list[np.ndarray]) -> int:
         """k for one mesh: the given one, or (auto) the smallest making every triangle's longest edge span at
@@ -340,6 +406,11 @@ class Fermat(Forward):
         return draws
 
     # ------------------------------------------------------------------ per-size images
+    def screen_bytes_per_sample(self) -> int:
+        """The G-buffer's position, normal and reflection (float32 RGBA, 16 B each) and two depth textures (4 B
+        each): 56 B per target sample, measured 54.5 (fermat 134.5 B per sample at 2048², forward 80)."""
+        return super().screen_bytes_per_sample() + 56
+
     def _images(self, size: tuple[int, int]):
         """G-buffer (position + id, normal) and reflection image at a render size, re-created on change."""
         if self._gbuffer_size == size:
@@ -348,7 +419,7 @@ class Fermat(Forward):
         position, normal, reflection = (ctx.texture(size, 4, dtype="f4") for _ in range(3))
         for tex in (position, normal, reflection):
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        depth_g, depth_r = ctx.depth_texture(size), ctx.depth_texture(size)
+        depth_g, depth_r = depth.float_depth_texture(ctx, size), ctx.depth_texture(size)  # camera: reversed-Z
         gbuffer_fbo = ctx.framebuffer(color_attachments=[position, normal], depth_attachment=depth_g)
         reflection_fbo = ctx.framebuffer(color_attachments=[reflection], depth_attachment=depth_r)
         self._objects += [position, normal, reflection, depth_g, depth_r, gbuffer_fbo, reflection_fbo]
@@ -368,11 +439,12 @@ class Fermat(Forward):
         ctx.disable(ctx.CULL_FACE)
         gbuffer_fbo.use()
         ctx.viewport = (0, 0, *target.size)
-        gbuffer_fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        gbuffer_fbo.clear(0.0, 0.0, 0.0, 0.0, depth=depth.CLEAR)
         program = get_program(ctx, GBUFFER_PROGRAM)
-        for vao, reflector_id in self._gbuffer_draws:
-            set_uniforms(program, {"u_view_proj": vp_bytes, "u_reflector_id": reflector_id})
-            vao.render()
+        with depth.camera_depth(ctx):
+            for vao, reflector_id in self._gbuffer_draws:
+                set_uniforms(program, {"u_view_proj": vp_bytes, "u_reflector_id": reflector_id})
+                vao.render()
         position.use(GBUFFER_UNITS[0])
         normal.use(GBUFFER_UNITS[1])
         for k, draws in enumerate(self._reflection_draws):

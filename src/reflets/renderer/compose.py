@@ -239,7 +239,7 @@ class Auto(Technique):
             raise RuntimeError("call prepare(scene) before render()")
         n_frames, s = self.frames(self.default_spp if spp is None else spp)
         width, height = size or self.scene.camera.size
-        check_target_size(self.ctx, width, height, s)
+        check_target_size(self.ctx, width, height, s, sum(t.screen_bytes_per_sample() for _, t in self.passes))
         view, proj = self.final.camera_matrices(width, height)
         view_proj = proj @ view
         vp_bytes = view_proj.T.astype(np.float32).tobytes()

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..diagnostics import warn_scene
 from ..errors import ArgumentError, SceneError
+from ..gpu.context import turn
 from ..scene import Scene, load_dict
 
 #: the transform fields ``set_transform`` takes
@@ -52,12 +53,13 @@ class Renderer:
         self.size = check_size(size)
         self.method = method or self.scene.method or DEFAULT_METHOD
         self._ctx = get_context()
-        self._technique = get_technique(self.method)(self._ctx, **params)
         self._stale = True  # the technique must prepare (again) before the next frame
         self._accumulated: tuple | None = None  # progressive: (key, float64 sum, frames)
         self.stats: dict[str, float] = {"prepare_ms": 0.0, "frame_ms": 0.0, "frames": 0, "prepares": 0}
-        warn_scene(self.scene, self.method)
-        self._prepare()
+        with turn(self._ctx):
+            self._technique = get_technique(self.method)(self._ctx, **params)
+            warn_scene(self.scene, self.method)
+            self._prepare()
 
     # ------------------------------------------------------------------ frames
     def render(self, seed: int = 0, spp: int | None = None) -> np.ndarray:
@@ -69,6 +71,10 @@ class Renderer:
         if self._technique is None:
             raise ArgumentError("this Renderer was released", field="render")
         self._check_thread()
+        with turn(self._ctx):
+            return self._render(seed, spp)
+
+    def _render(self, seed: int, spp: int | None) -> np.ndarray:
         if self._stale:
             self._prepare()
         t0 = time.perf_counter()
@@ -106,7 +112,7 @@ class Renderer:
             self._check_thread()
         self.scene = scene
         self._accumulated = None
-        if not self._stale and not self._technique.set_camera(self.scene.camera):
+        if not self._stale and not self._camera_moved():
             self._stale = True
 
     def set_light(self, index: int, **fields: Any) -> None:
@@ -142,7 +148,8 @@ class Renderer:
         """Free the GPU resources (the renderer cannot draw afterwards)."""
         if self._technique is not None:
             self._check_thread()
-            self._technique.release()
+            with turn(self._ctx):
+                self._technique.release()
             self._technique = None
 
     def __enter__(self) -> Renderer:
@@ -152,6 +159,10 @@ class Renderer:
         self.release()
 
     # ------------------------------------------------------------------ internals
+    def _camera_moved(self) -> bool:
+        with turn(self._ctx):
+            return self._technique.set_camera(self.scene.camera)
+
     def _check_thread(self) -> None:
         from ..gpu.context import check_thread
 

@@ -58,11 +58,18 @@ def project(camera: Camera, points: np.ndarray, size: tuple[int, int] | None = N
     return px
 
 
-def projection_matrix(camera: Camera, width: int, height: int, near: float, far: float) -> np.ndarray:
-    """The OpenGL projection of ``camera`` (row-major): ``perspective`` with the horizontal scale of
-    ``pixel_aspect`` and the principal point moved by ``principal_offset`` — the same pixels as
+def projection_matrix(
+    camera: Camera, width: int, height: int, near: float, far: float | None = None
+) -> np.ndarray:
+    """The scene camera's projection (row-major) for reversed-Z depth (``reflets.gpu.depth``): clip z in [0, 1],
+    depth = near / distance (1 at ``near``, 0 at ``far`` or, with ``far=None``, at infinity); the horizontal
+    scale of ``pixel_aspect`` and the principal point moved by ``principal_offset`` — the same pixels as
     ``pixel_rays``."""
-    proj = perspective(camera.fov_y, width / height / camera.pixel_aspect, near, far)
+    proj = perspective(camera.fov_y, width / height / camera.pixel_aspect, near, 2.0 * near)  # x, y rows only
     proj[0, 2] = -2.0 * camera.principal_offset[0]
     proj[1, 2] = 2.0 * camera.principal_offset[1]
+    if far is None:
+        proj[2, 2], proj[2, 3] = 0.0, near
+    else:
+        proj[2, 2], proj[2, 3] = near / (far - near), near * far / (far - near)
     return proj

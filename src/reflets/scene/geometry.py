@@ -68,6 +68,7 @@ def _build_mesh_data(scene: Scene, index: int) -> MeshData:
         if isinstance(mesh, FileMesh):
             local = load_mesh_file(scene.resolve(mesh.file))
         else:
+            _check_segments(mesh, index)
             params = mesh.model_dump(exclude={"name", "material", "transform", "shape", "reflector"})
             if params.get("file") is not None:  # a shape reading data (heightfield): relative to the scene
                 params["file"] = scene.resolve(params["file"])
@@ -85,11 +86,70 @@ def _build_mesh_data(scene: Scene, index: int) -> MeshData:
     return local.transformed(mesh.transform.matrix())
 
 
+#: peak bytes per vertex of building a procedural mesh (float64 attributes and their temporaries, then the float32
+#: mesh; tracemalloc: 413–446 for plane, sphere, torus, Bézier and height field at 1024² segments; a forward
+#: render of a 4.7 M-vertex sphere peaked 407 above its baseline)
+MESH_BYTES_PER_VERTEX = 448
+
+
+def _check_segments(mesh, index: int) -> None:
+    """Refuse ``segments`` = (n_u, n_v) whose (n_u + 1)(n_v + 1) vertices × MESH_BYTES_PER_VERTEX exceed the
+    available memory (reflets.resources), before the mesh is built (a cylinder's single count stays small)."""
+    from ..resources import check
+
+    segments = getattr(mesh, "segments", None)
+    if not isinstance(segments, tuple | list) or len(segments) != 2:
+        return
+    nu, nv = (int(n) for n in segments)
+    vertices = (nu + 1) * (nv + 1)
+
+    def fits(budget: int) -> str | None:
+        scale = min(1.0, (budget / (vertices * MESH_BYTES_PER_VERTEX)) ** 0.5)
+        u, v = int(nu * scale), int(nv * scale)
+        return f"[{u}, {v}]" if u >= 1 and v >= 1 else None
+
+    what = f"{vertices:,} vertices × {MESH_BYTES_PER_VERTEX} B"
+    check(f"mesh[{index}].segments", vertices * MESH_BYTES_PER_VERTEX, value=f"[{nu}, {nv}]", what=what, fits=fits)
+
+
 def bounding_sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
     """Centre and radius of a sphere holding all points (bounding-box centre; not minimal, but cheap)."""
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre = 0.5 * (lo + hi)
     return centre, float(np.sqrt(np.max(np.sum((points - centre) ** 2, axis=1))))
+
+
+#: the automatic near plane: this fraction of the smallest object's bounding-box diagonal (reversed-Z depth keeps
+#: its precision however small the near plane is: ``reflets.gpu.depth``)
+NEAR_FRACTION = 1e-3
+
+
+def bounding_boxes(point_sets) -> np.ndarray:
+    """(N, 2, 3) lower and upper corners of each non-empty point set (a mesh's vertices, an emitter's corners)."""
+    boxes = [(p.min(axis=0), p.max(axis=0)) for p in map(np.asarray, point_sets) if len(p)]
+    return np.asarray(boxes, dtype=np.float64).reshape(-1, 2, 3)
+
+
+def camera_range(camera, boxes: np.ndarray) -> tuple[float, float | None]:
+    """(near, far) of the camera's view: ``camera.near`` / ``camera.far`` where given; else far is infinite (None)
+    and near is :data:`NEAR_FRACTION` of the smallest box's diagonal, or half the distance to the nearest box
+    if that is less — never derived from the scene's extent, so a 10,000 km ground plane leaves a 10 cm sphere
+    0.5 m away in view."""
+    far = camera.far
+    near = camera.near
+    if near is None:
+        boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 2, 3)
+        eye = np.asarray(camera.position, dtype=np.float64)
+        sizes = np.linalg.norm(boxes[:, 1] - boxes[:, 0], axis=1)
+        sizes = sizes[sizes > 0]
+        near = NEAR_FRACTION * float(sizes.min()) if sizes.size else NEAR_FRACTION
+        gaps = np.linalg.norm(np.maximum(np.maximum(boxes[:, 0] - eye, eye - boxes[:, 1]), 0.0), axis=1)
+        gaps = gaps[gaps > 0]
+        if gaps.size:
+            near = min(near, 0.5 * float(gaps.min()))
+        if far is not None:
+            near = min(near, NEAR_FRACTION * far)
+    return float(near), None if far is None else float(far)
 
 
 def clip_planes(eye: np.ndarray, points: np.ndarray) -> tuple[float, float]:

@@ -49,9 +49,19 @@ class Camera(Strict):
         640,
         480,
     )
+    near: Positive | None = Field(
+        None,
+        description="near clip distance (scene units); default: 1/1000 of the smallest object's size, or less where "
+        "an object is nearer (depth is reversed-Z float: its precision does not depend on it)",
+    )
+    far: Positive | None = Field(
+        None, description="far clip distance (scene units); default: none (an infinite far plane)"
+    )
 
     @model_validator(mode="after")
     def _non_degenerate(self) -> Camera:
+        if self.near is not None and self.far is not None and not self.near < self.far:
+            raise ValueError(f"near ({self.near:g}) must be less than far ({self.far:g})")
         forward = np.subtract(self.look_at, self.position)
         if np.linalg.norm(forward) == 0:
             raise ValueError("position and look_at coincide; the view direction is undefined")

@@ -333,7 +333,10 @@ def cached_table(profile: str, fresnel: dict, size: int, rays: int, backend: str
     from .table import build_table
 
     key = table_key(profile, fresnel, size, rays, backend)
-    return TABLES.get(key, lambda: build_table(profile, **fresnel, size=size, rays=rays, backend=backend, ctx=ctx))
+    names = ("table_size", "rays")  # the material's fields
+    return TABLES.get(
+        key, lambda: build_table(profile, **fresnel, size=size, rays=rays, backend=backend, ctx=ctx, names=names)
+    )
 
 
 def alpha_key(material: Scratched) -> str:
@@ -348,9 +351,36 @@ def alpha_key(material: Scratched) -> str:
     return "alpha-" + content_key(data)
 
 
+#: bytes per layer texel of the α maps, baked or read and uploaded (float64 layers, their stack and float32 copy;
+#: then the padded, transposed and mip-mapped texture array: measured 19.4–21.3 at 32 layers of 1024² and 2048²),
+#: and the splatting's fixed working set
+ALPHA_BYTES_PER_TEXEL = 24
+ALPHA_FIXED_BYTES = 160_000_000
+
+
+def check_alpha_size(material: Scratched) -> None:
+    """Refuse an ``alpha_size`` whose K layers of R² texels (K · R² · ALPHA_BYTES_PER_TEXEL + ALPHA_FIXED_BYTES)
+    exceed the available memory (reflets.resources), before baking or uploading them."""
+    from ..resources import check
+
+    k, r = material.layer_count, material.alpha_size
+
+    def estimate(side: int) -> int:
+        return k * side * side * ALPHA_BYTES_PER_TEXEL + ALPHA_FIXED_BYTES
+
+    def fits(budget: int) -> int | None:
+        side = r
+        while side >= 16 and estimate(side) > budget:
+            side //= 2
+        return side if side >= 16 else None
+
+    check("alpha_size", estimate(r), value=r, what=f"{k} layers of {r}² texels", fits=fits)
+
+
 def cached_alpha(material: Scratched) -> np.ndarray:
     if material.coverage is not None:
         return np.full((material.layer_count, 1, 1), material.coverage, np.float32)
+    check_alpha_size(material)
     return ALPHAS.get(alpha_key(material), lambda: bake_alpha(material))
 
 

@@ -244,6 +244,49 @@ def table_from_tallies(
     )
 
 
+#: the fixed working set of the NumPy tracer's chunk of rays (measured 67–71 MB)
+TRACE_CHUNK_BYTES = 80_000_000
+
+
+def table_bytes(size: int, rays: int, channels: int, backend: str) -> int:
+    """Peak bytes of :func:`build_table` for ``size`` M bins, ``rays`` N per column, C Fresnel ``channels``:
+    9 M³ (the inverse CDF's rows, float64, and its comparison) + 8 M² (2 + 2 · 2 · C) (the float64 tallies) + for
+    the NumPy tracer 16 M N (each ray's column and rank, int64) + TRACE_CHUNK_BYTES, for the GPU 16 · 7 M² (its
+    tally slots, read back and converted). Peak resident growth measured (NumPy, one channel) / estimated:
+    M = 512, N = 200: 1,259 / 1,302 MB; M = 128, N = 16,000: 104 / 132; M = 64, N = 200,000: 276 / 287."""
+    m, n = int(size), int(rays)
+    common = 9 * m**3 + 8 * m * m * (2 + 4 * channels)
+    if backend == "numpy":
+        return common + 16 * m * n + TRACE_CHUNK_BYTES
+    return common + 16 * 7 * m * m
+
+
+def check_table(size: int, rays: int, channels: int, backend: str, names: tuple[str, str] = ("size", "rays")) -> None:
+    """Refuse a table whose :func:`table_bytes` exceed the available memory (reflets.resources), naming ``size``
+    or, where the rays take most of it, ``rays`` (``names``: the caller's names of the two)."""
+    from ..resources import check, largest_fitting
+
+    m, n = int(size), int(rays)
+    estimate = table_bytes(m, n, channels, backend)
+    what = f"{m}³ inverse-CDF entries" + (f", {m * n:,} rays" if backend == "numpy" else "")
+    if backend == "numpy" and 16 * m * n > estimate / 2:
+        check(
+            names[1],
+            estimate,
+            value=f"{n:,} with {names[0]} = {m}",
+            what=what,
+            fits=lambda budget: largest_fitting(lambda k: table_bytes(m, k, channels, backend), 1, n, budget),
+        )
+    else:
+        check(
+            names[0],
+            estimate,
+            value=m,
+            what=what,
+            fits=lambda budget: largest_fitting(lambda k: table_bytes(k, n, channels, backend), 2, m, budget),
+        )
+
+
 def build_table(
     profile_spec: str | Profile,
     *,
@@ -256,19 +299,23 @@ def build_table(
     backend: str = "numpy",
     symmetrize: bool = True,
     ctx=None,
+    names: tuple[str, str] = ("size", "rays"),
 ) -> ScratchTable:
     """Precompute the scratch BRDF table of a profile.
 
     ``profile_spec``: ``vgroove:D`` (depth D for width 1), ``quartic:D``, ``flat``, ``file:PATH`` or a
     :class:`Profile`. Fresnel of the walls: ``conductor=(eta, k)`` (scalars or RGB triples; Lazányi by default)
     overrides ``ior`` (real index, scalar or RGB; Schlick by default); ``ior=None`` and no conductor → F = 1.
-    ``fresnel="exact"`` uses the exact dielectric / complex Fresnel instead. ``size`` × ``size`` bins,
+    ``fresnel="exact"`` uses the exact dielectric / complex Fresnel instead. ``size`` × ``size`` bins (checked
+    with ``rays`` against the available memory first: :func:`table_bytes`; ``names`` are theirs in errors),
     ``rays`` rays per φ_in column, ``seed`` of the random numbers, ``backend`` ``"numpy"`` (float64 reference)
     or ``"gpu"`` (compute shader, float32). ``symmetrize`` averages the table over reciprocity (and the
     anti-diagonal for symmetric profiles) and rescales it symmetrically so each column keeps its traced energy.
     """
     profile = parse_profile(profile_spec)
     fres = make_fresnel(ior=ior, conductor=conductor, model=fresnel)
+    if backend in ("numpy", "gpu"):
+        check_table(size, rays, fres.channels, backend, names)
     if backend == "numpy":
         tallies = trace_table(profile, size=size, rays=rays, fresnel=fres, seed=seed)
     elif backend == "gpu":

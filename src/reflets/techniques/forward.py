@@ -28,11 +28,12 @@ from pydantic import Field
 
 from ..equirect import rotation_y
 from ..errors import ArgumentError
-from ..gpu import FrameTimer, ProgramSpec, get_program, release_objects, set_uniforms
+from ..gpu import FrameTimer, ProgramSpec, depth, get_program, release_objects, set_uniforms
+from ..resources import check, fitting_size, largest_fitting
 from ..scene.camera import projection_matrix
 from ..scene.emitters import area_light_samples, polygon_normal
 from ..scene.environment import environment_grid
-from ..scene.geometry import clip_planes_of_sphere
+from ..scene.geometry import camera_range
 from ..scene.lightmask import mask_lookup
 from ..scene.meshdata import MeshData
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
@@ -103,14 +104,40 @@ def shadow_settings(params) -> ShadowSettings:
     return ShadowSettings(params.soft_shadows, params.shadow_samples, params.shadow_cascades)
 
 
-def check_target_size(ctx, width: int, height: int, s: int) -> None:
-    """The supersampled target must fit the driver's largest framebuffer (else "framebuffer not complete")."""
+#: bytes per sample of a frame (measured 80.0 on llvmpipe at 2048² and 4096², 1 and 4 spp): the float32 RGBA colour
+#: and 32-bit depth the driver holds (20), the read-back (16, and its RGB copy 12), the float64 sum of the frames
+#: (24) — then resolve's float64 mean (24) and float32 image (12) beside the sum
+FRAME_BYTES_PER_SAMPLE = 80
+
+
+def check_target_size(ctx, width: int, height: int, s: int, extra_per_sample: int = 0) -> None:
+    """The supersampled target must fit the driver's largest framebuffer (else "framebuffer not complete"), and
+    its memory — width · height · s² · (FRAME_BYTES_PER_SAMPLE + ``extra_per_sample``: a technique's own images
+    at the target size) — the available memory (reflets.resources), before the target is made."""
     limit = int(ctx.info.get("GL_MAX_TEXTURE_SIZE", 16384))
     if max(width, height) * s > limit:
         raise ArgumentError(
             f"{s}×{s} supersampling of {width}x{height} needs a {width * s}x{height * s} target; this GL driver "
             f"allows at most {limit} per side (use fewer spp or a smaller size)",
             field="spp",
+        )
+    per_sample = FRAME_BYTES_PER_SAMPLE + extra_per_sample
+    samples = width * height * s * s
+    what = f"{samples:,} samples × {per_sample} B: target, read-back, sums"
+    if s > 1:  # the largest s² that fits at this size
+
+        def fits(budget: int) -> str | None:
+            side = largest_fitting(lambda k: width * height * k * k * per_sample, 1, s, budget)
+            return None if side is None else f"{side * side} spp"
+
+        check("spp", samples * per_sample, value=f"{s * s} spp at {width}x{height}", what=what, fits=fits)
+    else:  # the largest size of the same shape that fits
+        check(
+            "size",
+            samples * per_sample,
+            value=f"{width}x{height}",
+            what=what,
+            fits=lambda budget: fitting_size(width, height, per_sample, budget),
         )
 
 
@@ -225,9 +252,7 @@ class Forward(Technique):
         self._background = get_program(ctx, BACKGROUND_PROGRAM)
         self._background_vao = ctx.vertex_array(self._background, [])
         self._objects.append(self._background_vao)
-        self._near, self._far = clip_planes_of_sphere(
-            np.asarray(scene.camera.position, np.float64), *self.prepared.bounds
-        )
+        self._near, self._far = camera_range(scene.camera, self.prepared.boxes)
         self.timer = FrameTimer(ctx)
 
     def _mesh_draw(self, index: int, material) -> tuple:
@@ -314,6 +339,11 @@ class Forward(Technique):
         anti-alias with s×s samples."""
         return 1, samples_per_pixel_side(spp)
 
+    def screen_bytes_per_sample(self) -> int:
+        """Bytes per target sample of this pass's own images at the target size, beyond the frame's
+        (FRAME_BYTES_PER_SAMPLE): its shadings' screen maps (a technique adds its G-buffer)."""
+        return sum(getattr(shading, "screen_bytes_per_sample", 0) for shading in getattr(self, "shadings", []))
+
     def mesh_vertex_array(self, program, mesh: int | MeshData):
         """A vertex array of mesh ``mesh`` (a scene index: the prepared scene's buffers; or any ``MeshData``) for a
         program of mesh.vert's layout, owned by this technique."""
@@ -348,7 +378,7 @@ class Forward(Technique):
         ctx = self.ctx
         n_frames, s = self.frames(self.default_spp if spp is None else spp)
         width, height = size or self.scene.camera.size
-        check_target_size(ctx, width, height, s)
+        check_target_size(ctx, width, height, s, self.screen_bytes_per_sample())
         view, proj = self.camera_matrices(width, height)
         view_proj = proj @ view
         vp_bytes = view_proj.T.astype(np.float32).tobytes()  # GLSL matrices are column-major
@@ -377,14 +407,19 @@ class Forward(Technique):
         if self._owns_prepared and not self.prepared.shadows.set_camera(camera):
             return False
         self.scene = self.scene.model_copy(update={"camera": camera})
-        self._near, self._far = clip_planes_of_sphere(np.asarray(camera.position, np.float64), *self.prepared.bounds)
+        self._near, self._far = camera_range(camera, self.prepared.boxes)
         return True
 
     def _draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
-        ctx = self.ctx
-        role = self.role
         for shading in self.shadings:  # what the meshes read: light views, screen-space maps
             shading.draw_inputs(target, vp_bytes)
+        with depth.camera_depth(self.ctx):
+            self._draw_camera(target, vp_bytes, view_proj, frame, seed)
+
+    def _draw_camera(self, target, vp_bytes, view_proj, frame: int, seed: int) -> None:
+        """The meshes, emitters and background from the camera (reversed-Z: ``reflets.gpu.depth``)."""
+        ctx = self.ctx
+        role = self.role
         radiance = self.params.output == "radiance"  # AOVs keep 0 where no surface is seen
         color = self.scene.background_color() if radiance else (0.0, 0.0, 0.0)
         if role.clear:
@@ -394,7 +429,7 @@ class Forward(Technique):
         ctx.enable(ctx.DEPTH_TEST)
         ctx.disable(ctx.CULL_FACE)
         if role.additive:  # the same surfaces again, lit by other lights: add where the depth is equal
-            ctx.depth_func = "<="
+            ctx.depth_func = depth.NEARER_OR_EQUAL
             target.fbo.depth_mask = False
             ctx.enable(ctx.BLEND)
             ctx.blend_func = moderngl.ONE, moderngl.ONE
@@ -420,7 +455,7 @@ class Forward(Technique):
         if role.additive:
             ctx.disable(ctx.BLEND)
             target.fbo.depth_mask = True
-            ctx.depth_func = "<"
+            ctx.depth_func = depth.NEARER
         if not role.extras:
             ctx.disable(ctx.DEPTH_TEST)
             return
@@ -440,9 +475,9 @@ class Forward(Technique):
         if radiance and color is None:
             # The environment last, only where the depth buffer is still clear (llvmpipe then skips the
             # covered pixels: a full-screen background pass first cost 4× the clear at 800×600).
-            ctx.depth_func = "<="
+            ctx.depth_func = depth.NEARER_OR_EQUAL
             self._draw_background(view_proj)
-            ctx.depth_func = "<"
+            ctx.depth_func = depth.NEARER
         ctx.disable(ctx.DEPTH_TEST)
 
     def _draw_background(self, view_proj: np.ndarray) -> None:

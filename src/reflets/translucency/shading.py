@@ -11,8 +11,9 @@ import moderngl
 import numpy as np
 
 from ..errors import ArgumentError
-from ..gpu import GLObjects, ProgramSpec, get_program, set_uniforms
+from ..gpu import GLObjects, ProgramSpec, depth, get_program, set_uniforms
 from ..gpu.programs import shared_constants
+from ..resources import check, largest_fitting
 from ..scene.geometry import bounding_sphere
 from ..scene.model import DirectionalLight, Scene
 from ..scene.transform import look_at, perspective
@@ -61,6 +62,22 @@ TERM_BITS = {"specular": 1, "single": 2, "multiple": 4, "transmission": 8}
 REFRACTION_MODES = {"off": 0, "on": 1, "exit": 2}
 
 
+#: bytes per texel of a light view and of a screen map: position and normal (float32 RGBA) and a 32-bit depth
+#: (measured 36.0 per light-map texel at 2048² and 4096²)
+MAP_BYTES_PER_TEXEL = 36
+
+
+def check_light_map(side: int) -> None:
+    """Refuse a ``light_map`` whose light view (side² × MAP_BYTES_PER_TEXEL) exceeds the available memory."""
+    check(
+        "light_map",
+        side * side * MAP_BYTES_PER_TEXEL,
+        value=side,
+        what=f"{side}² texels × {MAP_BYTES_PER_TEXEL} B: position, normal, depth",
+        fits=lambda budget: largest_fitting(lambda n: n * n * MAP_BYTES_PER_TEXEL, 1, side, budget),
+    )
+
+
 class TranslucentShading(MaterialShading):
     """Translucent meshes lit by the one light of ``scene`` through its light view (``params``: the
     ``translucent`` method's parameters)."""
@@ -85,13 +102,16 @@ class TranslucentShading(MaterialShading):
         points = np.concatenate([m.positions for m in lit or meshes]) if meshes else np.zeros((1, 3))
         self._light_view_proj, self._shadow_bias = self._light_camera(points)
         ctx = self.ctx
+        check_light_map(params.light_map)
         size = (params.light_map, params.light_map)
         self._light_maps = tuple(self._own(ctx.texture(size, 4, dtype="f4")) for _ in range(2))
         for tex in self._light_maps:
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
             tex.repeat_x = tex.repeat_y = False
-        depth = self._own(ctx.depth_texture(size))
-        self._lv_fbo = self._own(ctx.framebuffer(color_attachments=list(self._light_maps), depth_attachment=depth))
+        light_depth = self._own(ctx.depth_texture(size))
+        self._lv_fbo = self._own(
+            ctx.framebuffer(color_attachments=list(self._light_maps), depth_attachment=light_depth)
+        )
         self._light_view_drawn = False
         program = get_program(ctx, LIGHT_VIEW_PROGRAM)
         self._lv_vaos = [self._own(prepared.vertex_array(program, i)) for i in range(len(meshes))]
@@ -196,6 +216,11 @@ class TranslucentShading(MaterialShading):
         self._tables.append(table)
         return table
 
+    @property
+    def screen_bytes_per_sample(self) -> int:
+        """Bytes per target sample of the screen maps (``camera`` with view_blend, ``back`` with refraction)."""
+        return MAP_BYTES_PER_TEXEL * ((self.params.view_blend is not None) + (self.params.refraction != "off"))
+
     def _screen_maps(self, name: str, size: tuple[int, int]):
         """Position and normal maps at the render size, seen from the camera: ``camera`` (the view blend's
         first surfaces) or ``back`` (the refraction's back faces); re-created when the size changes, the
@@ -207,8 +232,8 @@ class TranslucentShading(MaterialShading):
         for tex in new:
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
             tex.repeat_x = tex.repeat_y = False
-        depth = self._own(self.ctx.depth_texture(size))
-        fbo = self._own(self.ctx.framebuffer(color_attachments=list(new), depth_attachment=depth))
+        depth_texture = self._own(depth.float_depth_texture(self.ctx, size))  # camera views: reversed-Z
+        fbo = self._own(self.ctx.framebuffer(color_attachments=list(new), depth_attachment=depth_texture))
         keys = (f"u_{name}_position", f"u_{name}_normal")
         for table in self._tables:
             if keys[0] in table:
@@ -233,25 +258,26 @@ class TranslucentShading(MaterialShading):
             for vao in self._lv_vaos:
                 vao.render()
             self._light_view_drawn = True
-        if self.params.view_blend is not None:  # the camera's own maps, same program
-            self._screen_maps("camera", target.size)
-            fbo = self._screen["camera"][1]
-            fbo.use()
-            ctx.viewport = (0, 0, *target.size)
-            fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-            set_uniforms(program, {"u_view_proj": vp_bytes})
-            for vao in self._lv_vaos:
-                vao.render()
-        if self._back_vaos:  # the nearest back faces (refraction)
-            self._screen_maps("back", target.size)
-            fbo = self._screen["back"][1]
-            fbo.use()
-            ctx.viewport = (0, 0, *target.size)
-            fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-            eye = tuple(float(c) for c in self.scene.camera.position)
-            set_uniforms(get_program(ctx, BACK_FACE_PROGRAM), {"u_view_proj": vp_bytes, "u_eye": eye})
-            for vao in self._back_vaos:
-                vao.render()
+        with depth.camera_depth(ctx):
+            if self.params.view_blend is not None:  # the camera's own maps, same program
+                self._screen_maps("camera", target.size)
+                fbo = self._screen["camera"][1]
+                fbo.use()
+                ctx.viewport = (0, 0, *target.size)
+                fbo.clear(0.0, 0.0, 0.0, 0.0, depth=depth.CLEAR)
+                set_uniforms(program, {"u_view_proj": vp_bytes})
+                for vao in self._lv_vaos:
+                    vao.render()
+            if self._back_vaos:  # the nearest back faces (refraction)
+                self._screen_maps("back", target.size)
+                fbo = self._screen["back"][1]
+                fbo.use()
+                ctx.viewport = (0, 0, *target.size)
+                fbo.clear(0.0, 0.0, 0.0, 0.0, depth=depth.CLEAR)
+                eye = tuple(float(c) for c in self.scene.camera.position)
+                set_uniforms(get_program(ctx, BACK_FACE_PROGRAM), {"u_view_proj": vp_bytes, "u_eye": eye})
+                for vao in self._back_vaos:
+                    vao.render()
         ctx.disable(ctx.DEPTH_TEST)
 
     def release(self) -> None:

@@ -3,5 +3,5 @@ out vec2 v_ndc;
 void main() {
     vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2)) * 2.0 - 1.0;
     v_ndc = p;
-    gl_Position = vec4(p, 1.0, 1.0);
+    gl_Position = vec4(p, 0.0, 1.0);  // reversed-Z: depth 0 is infinitely far
 }

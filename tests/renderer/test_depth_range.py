@@ -1,0 +1,116 @@
+"""The camera's depth range: reversed-Z float depth and an infinite far plane, so a huge ground plane neither
+clips a near object nor makes distant surfaces z-fight; optional camera.near / camera.far."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import reflets
+from reflets.errors import SceneError
+from reflets.scene import load_dict
+from reflets.scene.camera import projection_matrix
+from reflets.scene.geometry import camera_range
+
+RED, GREEN, GREY = [0.8, 0.05, 0.05], [0.05, 0.8, 0.05], [0.5, 0.5, 0.5]
+SIZE = (64, 48)
+
+
+def _scene(meshes, camera, **light) -> dict:
+    return {
+        "camera": {"fov_y": 50, "size": list(SIZE), **camera},
+        "materials": {c: {"type": "lambert", "albedo": v} for c, v in (("red", RED), ("green", GREEN), ("grey", GREY))},
+        "mesh": meshes,
+        "light": [{"type": "directional", "direction": [0.3, -1, -0.2], "irradiance": [3, 3, 3], **light}],
+    }
+
+
+def _ground_and_sphere(ground_side: float | None, shadows: bool = False) -> dict:
+    meshes = [{"shape": "sphere", "radius": 0.1, "material": "red", "transform": {"translate": [0, 1.0, -0.5]}}]
+    if ground_side is not None:
+        meshes.append({"shape": "plane", "size": [ground_side, ground_side], "material": "grey"})
+    return _scene(meshes, {"position": [0, 1.0, 0], "look_at": [0, 0.9, -1]}, shadows=shadows)
+
+
+def _red(image: np.ndarray) -> np.ndarray:
+    return (image[..., 0] > 2.0 * image[..., 1]) & (image[..., 0] > 0.01)
+
+
+@pytest.mark.parametrize("method", ["forward", "auto"])
+def test_a_near_sphere_is_the_same_over_ground_planes_of_any_size(ctx, method):
+    """10 m, 100 km and 10,000 km ground planes: the 10 cm sphere 0.5 m away covers the same pixels with the same
+    values (a 100 km plane used to push the automatic near plane past it: the sphere vanished)."""
+    alone = reflets.render(_ground_and_sphere(None), method=method)
+    sphere = _red(alone)
+    assert sphere.sum() > 100
+    for side in (10.0, 1e5, 1e7):
+        image = reflets.render(_ground_and_sphere(side), method=method)
+        np.testing.assert_array_equal(_red(image), sphere, err_msg=f"ground plane {side:g} m")
+        np.testing.assert_allclose(image[sphere], alone[sphere], atol=2e-2, err_msg=f"ground plane {side:g} m")
+        assert np.all(image[-10:].sum(axis=-1) > 0), "the ground fills the bottom of the view"
+
+
+def test_shadows_on_the_near_ground_hold_under_a_huge_ground_plane(ctx):
+    """The sphere's shadow on the ground near it, with the 10 m plane or ones to the horizon (cascades and the
+    whole-scene view fitted to a 10⁷ m scene): within 0.05 of each other wherever the 10 m plane is seen."""
+    images = {}
+    for side in (10.0, 1e5, 1e7):
+        scene = _ground_and_sphere(side, shadows=True)
+        scene["light"][0]["direction"] = [0.6, -1, 0.3]  # the shadow falls in view
+        images[side] = reflets.render(scene, method="forward")
+    seen = images[10.0].sum(axis=-1) > 0
+    shadowed = seen & (images[10.0].sum(axis=-1) < 0.2 * np.percentile(images[10.0][seen].sum(axis=-1), 90))
+    assert shadowed.sum() > 20  # the shadow is in view
+    for side in (1e5, 1e7):
+        assert np.abs(images[side] - images[10.0]).sum(axis=-1)[seen].max() < 0.05, f"ground plane {side:g} m"
+
+
+def test_two_planes_a_millimetre_apart_100_m_away_do_not_z_fight(ctx):
+    """Seen from 100 m straight above, with a sphere 0.5 m from the camera and a 10,000 km plane below: the upper
+    plane wins every pixel (a 24-bit standard depth buffer resolves ~1.3 mm there with this near plane)."""
+    meshes = [
+        {"shape": "plane", "size": [40, 40], "material": "red"},
+        {"shape": "plane", "size": [40, 40], "material": "green", "transform": {"translate": [0, 0.001, 0]}},
+        {"shape": "plane", "size": [1e7, 1e7], "material": "grey", "transform": {"translate": [0, -1, 0]}},
+        {"shape": "sphere", "radius": 0.05, "material": "grey", "transform": {"translate": [0.3, 99.5, 0.2]}},
+    ]
+    scene = _scene(meshes, {"position": [0, 100, 0], "look_at": [0, 0, 0], "up": [0, 0, -1], "fov_y": 20})
+    image = reflets.render(scene, method="forward")
+    centre = image[8:40, 10:54]  # inside the 40 m planes, away from the sphere's corner
+    assert np.all(centre[..., 1] > 4.0 * centre[..., 0]), f"{np.sum(centre[..., 0] >= centre[..., 1])} red pixels"
+
+
+def test_camera_near_and_far_clip_and_are_validated(ctx):
+    scene = _ground_and_sphere(10.0)
+    scene["camera"]["near"] = 0.6  # past the sphere
+    assert not _red(reflets.render(scene)).any()
+    scene["camera"].update(near=0.01, far=0.3)  # before it
+    assert not _red(reflets.render(scene)).any()
+    scene["camera"].update(near=0.01, far=1000.0)
+    assert _red(reflets.render(scene)).sum() > 100
+    scene["camera"].update(near=2.0, far=1.0)
+    with pytest.raises(SceneError, match="near .* must be less than far"):
+        load_dict(scene)
+    scene["camera"].update(near=-1.0, far=None)
+    with pytest.raises(SceneError, match="camera.near"):
+        load_dict(scene)
+
+
+def test_the_automatic_near_plane_follows_the_nearest_object_not_the_scene_extent():
+    camera = load_dict(_ground_and_sphere(1e7)).camera
+    boxes = np.array([[[-0.1, 0.9, -0.6], [0.1, 1.1, -0.4]], [[-5e6, 0, -5e6], [5e6, 0, 5e6]]])
+    near, far = camera_range(camera, boxes)
+    assert far is None and near == pytest.approx(1e-3 * np.sqrt(3 * 0.2**2))
+    near, _ = camera_range(camera, boxes[1:])  # the plane only: 1 m below the eye
+    assert near == pytest.approx(0.5)
+
+
+def test_the_projection_maps_near_to_one_and_far_or_infinity_to_zero():
+    camera = load_dict(_ground_and_sphere(None)).camera
+    near = 0.01
+    for far in (None, 50.0):
+        proj = projection_matrix(camera, *SIZE, near, far)
+        for d in (near, 1.0, 50.0, 1e7):
+            clip = proj @ [0.0, 0.0, -d, 1.0]
+            expected = near / d if far is None else near * (far - d) / ((far - near) * d)
+            assert clip[3] == pytest.approx(d) and clip[2] / clip[3] == pytest.approx(expected, rel=1e-9, abs=1e-15)
