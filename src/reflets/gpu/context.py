@@ -113,9 +113,9 @@ _software_turn = threading.RLock()
 
 def turn(ctx):
     """What a render in ``ctx`` holds while it draws: on a software rasteriser (llvmpipe already spreads one
-    render over every core), a process-wide lock, so that threads take turns — `reflets bench threads` on 2 cores:
-    4 threads rendering at once 0.73–0.80× the throughput of one thread, taking turns 1.13×; on a GPU, nothing
-    (each thread's context runs at once)."""
+    render over every core), a process-wide lock, so that threads take turns — `reflets bench threads` on 2 cores
+    (benchmarks/results/threads.md): 4 threads taking turns 1.06× the throughput of one thread, rendering at once
+    0.82×; on a GPU, nothing (each thread's context runs at once; not measured here: no GPU)."""
     return _software_turn if is_software(ctx) else contextlib.nullcontext()
 
 
