@@ -44,7 +44,6 @@ from typing import ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
-from scipy.special import betaincinv
 
 from ..brdf.base import luminance
 from ..errors import ArgumentError
@@ -74,6 +73,8 @@ def cone_half_angle(exponent: float, t: float = 0.5) -> float:
 
     With s = sin²x, ∫_0^a cos^e x dx = ½ B(½, (e+1)/2) I_{sin²a}(½, (e+1)/2), so sin²a = I⁻¹(t; ½, (e+1)/2).
     """
+    from scipy.special import betaincinv  # imported when used (start-up time)
+
     return float(np.arcsin(np.sqrt(betaincinv(0.5, 0.5 * (float(exponent) + 1.0), t))))
 
 

@@ -55,8 +55,6 @@ import math
 from typing import Literal
 
 import numpy as np
-from scipy.optimize import brentq
-from scipy.special import betainc
 
 #: safety factors applied to the predicted steps (§2.4.2)
 SAFETY = {"lambert": 0.95, "phong": 0.90, "blinn": 0.50}
@@ -196,6 +194,8 @@ def normalized_distance(x, polygon):
 def lobe_fraction(a, e):
     """∫_{−a}^{a} cos^e / ∫_{−π/2}^{π/2} cos^e (the ratio of eq 2.22) = I_{sin²a}(½, (e + 1)/2)."""
     a = np.clip(np.asarray(a, dtype=np.float64), 0.0, np.pi / 2)
+    from scipy.special import betainc  # imported when used (start-up time)
+
     return betainc(0.5, (np.asarray(e, dtype=np.float64) + 1.0) / 2.0, np.sin(a) ** 2)
 
 
@@ -205,6 +205,8 @@ def cone_half_angle(e: float, t: float = 0.99) -> float:
         raise ValueError(f"tolerance t must be in (0, 1), got {t}")
     if e < 0 or not math.isfinite(e):
         raise ValueError(f"exponent must be finite and ≥ 0, got {e}")
+    from scipy.optimize import brentq
+
     return float(brentq(lambda a: float(lobe_fraction(a, e)) - t, 0.0, np.pi / 2, xtol=1e-13, rtol=1e-13))
 
 

@@ -15,7 +15,6 @@ from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
-from scipy.special import erfcx
 
 from ..fresnel import GOLD_ETA, GOLD_K, fresnel_conductor, fresnel_dielectric, fresnel_schlick
 from ..quantities import Positive
@@ -95,6 +94,8 @@ def smith_lambda_beckmann(w: np.ndarray, alpha_x: float, alpha_y: float) -> np.n
     Evaluated as exp(−a²)/2 · (1/(a√π) − erfcx(a)) (erfcx(a) = exp(a²) erfc(a)), which is the same
     expression without the cancellation of erf(a) − 1 for large a. Depends on |cosθ| only.
     """
+    from scipy.special import erfcx  # imported when used (start-up time)
+
     w = np.asarray(w, dtype=np.float64)
     a2t2 = _scaled_tan2(w, alpha_x, alpha_y)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):

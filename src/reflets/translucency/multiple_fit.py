@@ -37,7 +37,6 @@ from collections.abc import Callable
 from importlib import resources
 
 import numpy as np
-from scipy import optimize
 
 from .medium import Medium
 
@@ -127,6 +126,8 @@ def reduced_parameters(albedo_prime: float, eta: float, dipole_total: DipoleTota
 
     best = None
     for start in ([0.5, 0.0, -2.0, -1.5, -0.5], [0.3, 1.0, -1.0, -2.5, 0.0], [0.8, -1.0, -3.0, -1.0, -2.0]):
+        from scipy import optimize  # imported when used (start-up time)
+
         fit = optimize.least_squares(residual, start, bounds=([0, -9, -9, -9, -9], [1, 5, 5, 4, 4]))
         if best is None or fit.cost < best.cost:
             best = fit

@@ -23,7 +23,6 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy import integrate
 
 from . import multiple_fit
 from .medium import Medium
@@ -132,6 +131,8 @@ def _total_reflectance(profile: str, sigma_a: tuple, sigma_s: tuple, g: float, e
             return 2.0 * np.pi * r * r * float(profile_rd(profile, r, m))
 
         lo, hi = np.log(1e-7 * mfp), np.log(1e5 * mfp)
+        from scipy import integrate  # imported when used: scipy.integrate is a third of `import reflets`
+
         value, _ = integrate.quad(integrand, lo, hi, limit=400, epsabs=1e-12, epsrel=1e-10)
         out.append(value)
     return tuple(out)

@@ -17,7 +17,6 @@ f_β(x) = β √x (1 − x)/(1 − β) + x (eˣ − 1)/(e − 1) concentrates ri
 from __future__ import annotations
 
 import numpy as np
-from scipy import optimize
 
 from .optics import gauss_legendre
 
@@ -54,6 +53,8 @@ def fit_beta(rd, r_max: float, samples: int = 2001) -> float:
     def roughness(beta: float) -> float:
         g = rd(r_max * f_beta(x, beta))
         return float(np.sum(np.abs(np.diff(g, 2))) / h)
+
+    from scipy import optimize  # imported when used (start-up time)
 
     result = optimize.minimize_scalar(roughness, bounds=(0.0, BETA_MAX), method="bounded", options={"xatol": 1e-3})
     return float(result.x)
