@@ -484,8 +484,12 @@ class Forward(Technique):
         """The environment map along every camera ray (a full-screen triangle at the far plane)."""
         rot = rotation_y(self.scene.environment.rotate_y)
         self.prepared.environment_texture.use(0)
+        # the projection of directions only (the eye moved to the origin): rays without the cancellation of a
+        # near-plane point minus the eye in float32
+        to_eye = np.eye(4)
+        to_eye[:3, 3] = self.scene.camera.position
         uniforms = {
-            "u_inv_view_proj": np.linalg.inv(view_proj).T.astype(np.float32).tobytes(),
+            "u_inv_view_proj": np.linalg.inv(view_proj @ to_eye).T.astype(np.float32).tobytes(),
             "u_env_from_world": rot.astype(np.float32).tobytes(),  # R^T: column-major bytes of row-major R
             "u_env": 0,
         }
