@@ -211,9 +211,9 @@ def test_volumetric_reference_counts_its_worker_processes(monkeypatch):
 def test_scratch_table_size_and_rays_are_refused(capsys, monkeypatch, tmp_path):
     monkeypatch.setenv(ENV_VAR, "500MB")
     out = str(tmp_path / "t.npz")
-    err = _one_line(capsys, ["scratch-brdf", "--profile", "vgroove:0.5", "--size", "512", "--rays", "200", "-o", out])
+    err = _one_line(capsys, ["scratch-brdf", "--profile", "vgroove:0.5", "--size", "2048", "--rays", "200", "-o", out])
     _refusal(err, "size")
-    assert "512³ inverse-CDF entries" in err and "(≤ 357 fits)" in err
+    assert "2048² bins" in err and "(≤ 1274 fits)" in err
     argv = ["scratch-brdf", "--profile", "vgroove:0.5", "--size", "64", "--rays", "1000000", "-o", out]
     err = _one_line(capsys, argv)
     _refusal(err, "rays")
@@ -226,8 +226,8 @@ def test_scratched_material_names_its_own_fields(monkeypatch, tmp_path):
 
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))  # a cold disk cache
     monkeypatch.setenv(ENV_VAR, "1GB")
-    with pytest.raises(ResourceError, match=r"^table_size: 512 needs about 1\.\d GB"):
-        cached_table("vgroove:0.5", {"ior": None, "conductor": None, "fresnel": "auto"}, 512, 201, "numpy")
+    with pytest.raises(ResourceError, match=r"^table_size: 4096 needs about 4\.\d GB"):
+        cached_table("vgroove:0.5", {"ior": None, "conductor": None, "fresnel": "auto"}, 4096, 201, "numpy")
     scene = reflets.load_dict(
         {
             "camera": {"position": [0, 1, 2], "look_at": [0, 0, 0]},

@@ -119,13 +119,23 @@ def load_table(path: str | Path) -> ScratchTable:
 
 # -- building -----------------------------------------------------------------------------------------------
 def _invert_rows(cdf: np.ndarray, rows: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """φ with CDF_row(φ) = u, for piecewise-linear CDFs given at the M+1 bin edges (flat parts skipped)."""
+    """φ with CDF_row(φ) = u, for piecewise-linear CDFs given at the M+1 bin edges (flat parts skipped).
+
+    The bin of each u is a binary search in its own row (the requests grouped by row), so memory stays
+    proportional to the requests — gathering every request's whole row was M³ bytes × 9 for a table's M × M
+    inverse (9.7 GB at M = 1024)."""
     M = cdf.shape[0]
-    c = cdf[rows]  # (..., M+1)
-    u = np.clip(u, 0.0, 1.0)
-    k = np.sum(c[..., 1:-1] <= u[..., None], axis=-1)  # bin index whose [c_k, c_k+1) contains u
-    lo = np.take_along_axis(c, k[..., None], -1)[..., 0]
-    hi = np.take_along_axis(c, k[..., None] + 1, -1)[..., 0]
+    rows = np.asarray(rows)
+    u = np.clip(np.broadcast_to(u, rows.shape), 0.0, 1.0)
+    flat_rows, flat_u = rows.ravel(), u.ravel()
+    k = np.empty(flat_rows.shape, np.int64)  # bin index whose [c_k, c_k+1) contains u
+    order = np.argsort(flat_rows, kind="stable")
+    bounds = np.searchsorted(flat_rows[order], np.arange(M + 1))
+    for b in np.flatnonzero(np.diff(bounds)):
+        chosen = order[bounds[b] : bounds[b + 1]]
+        k[chosen] = np.searchsorted(cdf[b, 1:-1], flat_u[chosen], side="right")  # = #{c ≤ u}: the CDF is sorted
+    k = k.reshape(rows.shape)
+    lo, hi = cdf[rows, k], cdf[rows, k + 1]
     frac = np.where(hi > lo, (u - lo) / np.where(hi > lo, hi - lo, 1.0), 0.5)
     return -0.5 * np.pi + (k + np.clip(frac, 0.0, 1.0)) * np.pi / M
 
@@ -250,12 +260,13 @@ TRACE_CHUNK_BYTES = 80_000_000
 
 def table_bytes(size: int, rays: int, channels: int, backend: str) -> int:
     """Peak bytes of :func:`build_table` for ``size`` M bins, ``rays`` N per column, C Fresnel ``channels``:
-    9 M³ (the inverse CDF's rows, float64, and its comparison) + 8 M² (2 + 2 · 2 · C) (the float64 tallies) + for
-    the NumPy tracer 16 M N (each ray's column and rank, int64) + TRACE_CHUNK_BYTES, for the GPU 16 · 7 M² (its
-    tally slots, read back and converted). Peak resident growth measured (NumPy, one channel) / estimated:
-    M = 512, N = 200: 1,259 / 1,302 MB; M = 128, N = 16,000: 104 / 132; M = 64, N = 200,000: 276 / 287."""
+    M² (160 + 96 C) (the float64 tallies, their symmetrised and balanced copies, the CDF and its inverse) + for the
+    NumPy tracer 16 M N (each ray's column and rank, int64) + TRACE_CHUNK_BYTES, for the GPU 16 · 7 M² (its tally
+    slots, read back and converted). Measured (tracemalloc peak, NumPy tracer, N = 200) / estimated: C = 1, M = 512
+    64 / 149 MB, M = 1024 248 / 352 MB; C = 3, M = 1024 433 / 553 MB; M = 128, N = 16,000 105 / 117 MB;
+    M = 64, N = 200,000 276 / 286 MB."""
     m, n = int(size), int(rays)
-    common = 9 * m**3 + 8 * m * m * (2 + 4 * channels)
+    common = m * m * (160 + 96 * channels)
     if backend == "numpy":
         return common + 16 * m * n + TRACE_CHUNK_BYTES
     return common + 16 * 7 * m * m
@@ -268,7 +279,7 @@ def check_table(size: int, rays: int, channels: int, backend: str, names: tuple[
 
     m, n = int(size), int(rays)
     estimate = table_bytes(m, n, channels, backend)
-    what = f"{m}³ inverse-CDF entries" + (f", {m * n:,} rays" if backend == "numpy" else "")
+    what = f"{m}² bins" + (f", {m * n:,} rays" if backend == "numpy" else "")
     if backend == "numpy" and 16 * m * n > estimate / 2:
         check(
             names[1],
