@@ -81,3 +81,21 @@ def test_differential_beats_document_on_the_shadow(setting, composites):
     error = {mode: reflets.compare(out.linear[shadow][None], truth_coded[shadow][None])["relmse"]
              for mode, out in composites.items()}  # fmt: skip
     assert error["differential"] < error["document"]
+
+
+@pytest.mark.slow
+def test_the_differential_renderers_follow_the_camera_under_the_same_map(setting):
+    """A second frame under the same map moves the three renderers' cameras instead of making them again (no
+    new map file, no new prefiltering): the composite is the one a fresh compositor makes for that pose."""
+    objects, intrinsics, R, t, _, photo, _, cube = setting
+    kept = Compositor(objects, "differential")
+    kept(photo, intrinsics, R, t, cube)
+    R2, t2 = look_at_pose((0.25, 0.28, 0.38), (0, 0.02, 0))
+    second = kept(photo, intrinsics, R2, t2, cube)
+    fresh = Compositor(objects, "differential")(photo, intrinsics, R2, t2, cube)
+    assert second.timings["environment_ms"] == 0.0
+    assert second.timings["prepare_ms"] < 0.5 * fresh.timings["prepare_ms"]
+    np.testing.assert_allclose(second.linear, fresh.linear, atol=1e-5)
+    assert np.array_equal(second.image, fresh.image)
+    kept.release()
+    assert kept._local is None

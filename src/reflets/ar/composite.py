@@ -119,6 +119,9 @@ class Compositor:
             self.centres, self.radii = decompose(surface_samples(g.positions, g.faces, samples, seed), spheres, seed)
             self.timings["spheres_ms"] = 1e3 * (time.perf_counter() - t1)
         self._shadow = None  # (the map, its shadow texture): rebuilt when another map comes, as the document
+        #: the differential mode's renderers for one map: (the map, the folder of its file, {render: Renderer});
+        #: the next frame under the same map only moves their cameras (a probe, or a capture that has stopped)
+        self._local: tuple | None = None
 
     def __call__(self, photo: np.ndarray, intrinsics: Intrinsics, R: np.ndarray, t: np.ndarray, cube,
                  exposure: float = 1.0) -> Composite:  # fmt: skip
@@ -170,27 +173,54 @@ class Compositor:
     def _differential(self, camera, cube, ratio, on_ground, ground_points, timings) -> np.ndarray:
         x, z, side = self.footprint
         ground = (x, z, GROUND_EXTENT * max(side, 1e-3), 1.0)
-        size = tuple(camera["size"])
+        renderers = self._local_renderers(camera, cube, ground, timings)
+        timings["shading_ms"] = 0.0
         renders = {}
-        with tempfile.TemporaryDirectory(prefix="reflets-ar-") as tmp:
-            t0 = time.perf_counter()
-            environment = Path(tmp) / "captured.npy"
-            np.save(environment, capture.to_equirect(cube, 4 * capture._faces_of(cube).shape[1]))
-            timings["environment_ms"] = 1e3 * (time.perf_counter() - t0)
-            timings["prepare_ms"] = timings["shading_ms"] = 0.0
-            for name, kwargs in (("object", {"ground": None}), ("with", {"ground": ground}),
-                                 ("without", {"ground": ground, "with_objects": False})):  # fmt: skip
-                scene = local_scene(self.objects, camera, environment, **kwargs)
-                with Renderer(scene, method=self.method, size=size) as renderer:  # prepare: the prefiltered map
-                    renders[name] = renderer.render().reshape(-1, 3).astype(np.float64)
-                    timings["prepare_ms"] += renderer.stats["prepare_ms"]
-                    timings["shading_ms"] += renderer.stats["frame_ms"]
+        for name, renderer in renderers.items():
+            prepares = renderer.stats["prepares"]
+            renders[name] = renderer.render().reshape(-1, 3).astype(np.float64)
+            timings["shading_ms"] += renderer.stats["frame_ms"]
+            if renderer.stats["prepares"] > prepares:  # the camera move needed a new preparation (shadow views)
+                timings["prepare_ms"] += renderer.stats["prepare_ms"]
         half = 0.5 * ground[2]
         inside = (np.abs(ground_points[:, 0] - x) < half) & (np.abs(ground_points[:, 2] - z) < half)
         index = np.flatnonzero(on_ground)[inside]
         with_object, without = renders["with"][index], renders["without"][index]
         ratio[index] = np.where(without > 1e-12, with_object / np.maximum(without, 1e-12), 1.0)
         return renders["object"]
+
+    def _local_renderers(self, camera, cube, ground, timings) -> dict:
+        """The three renders of the local scene (the objects alone, the ground with and without them) for ``cube``:
+        made (its map written, the prefiltering done) when the map is new, else only their cameras moved."""
+        if self._local is not None and self._local[0] is cube:
+            t0 = time.perf_counter()
+            for renderer in self._local[2].values():
+                renderer.set_camera(**camera)
+            timings["environment_ms"], timings["prepare_ms"] = 0.0, 1e3 * (time.perf_counter() - t0)
+            return self._local[2]
+        self.release()
+        t0 = time.perf_counter()
+        folder = tempfile.TemporaryDirectory(prefix="reflets-ar-")
+        environment = Path(folder.name) / "captured.npy"  # read again if a camera move makes a renderer prepare
+        np.save(environment, capture.to_equirect(cube, 4 * capture._faces_of(cube).shape[1]))
+        timings["environment_ms"] = 1e3 * (time.perf_counter() - t0)
+        renderers = {}
+        for name, kwargs in (("object", {"ground": None}), ("with", {"ground": ground}),
+                             ("without", {"ground": ground, "with_objects": False})):  # fmt: skip
+            scene = local_scene(self.objects, camera, environment, **kwargs)
+            renderers[name] = Renderer(scene, method=self.method, size=tuple(camera["size"]))
+        timings["prepare_ms"] = sum(r.stats["prepare_ms"] for r in renderers.values())
+        self._local = (cube, folder, renderers)
+        return renderers
+
+    def release(self) -> None:
+        """Free the differential mode's renderers and their map's file (the next frame makes them again)."""
+        if self._local is not None:
+            _, folder, renderers = self._local
+            self._local = None
+            for renderer in renderers.values():
+                renderer.release()
+            folder.cleanup()
 
     def _document(self, camera, cube, ratio, on_ground, ground_points, timings) -> np.ndarray:
         t0 = time.perf_counter()
