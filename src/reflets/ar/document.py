@@ -34,6 +34,10 @@ from .lighting import face_weights_exact, face_weights_fit, face_weights_normali
 DOCUMENT_PROGRAM = ProgramSpec(
     "ar_document", vertex="reflets/ar/shaders/document.vert", fragment="reflets/ar/shaders/document.frag"
 )
+#: the sphere shadows' texture, a fragment per texel (a full-screen triangle)
+SHADOW_PROGRAM = ProgramSpec(
+    "ar_shadow", vertex="reflets/techniques/shaders/background.vert", fragment="reflets/ar/shaders/shadow.frag"
+)
 WEIGHTS = {"exact": face_weights_exact, "fit": face_weights_fit, "normalised": face_weights_normalised}
 #: GL_TEXTURE_CUBE_MAP_SEAMLESS (the document's seamless cube filtering)
 _SEAMLESS = 0x884F
@@ -151,14 +155,50 @@ def ambient(cube) -> np.ndarray:
     return (face_weights_exact(np.array([[0.0, 1.0, 0.0]])) @ capture.face_means(cube))[0] / np.pi
 
 
-def shadow_texture(centres: np.ndarray, radii: np.ndarray, cube, texels: int = SHADOW_TEXELS):
-    """The ground's remaining light fraction Π_i (1 − a_i) (grey, as RGB), on a texels² grid over SHADOW_EXTENT × the
-    spheres' footprint: (grid (T, T, 3), origin (x, z) of texel centre 0, spacing)."""
+def _shadow_grid(centres: np.ndarray, radii: np.ndarray, texels: int) -> tuple[np.ndarray, float]:
+    """(x, z) of texel centre 0 and the spacing of a texels² grid over SHADOW_EXTENT × the spheres' footprint."""
     lo = (centres - radii[:, None]).min(axis=0)[[0, 2]]
     hi = (centres + radii[:, None]).max(axis=0)[[0, 2]]
     middle, half = 0.5 * (lo + hi), 0.5 * SHADOW_EXTENT * float(np.max(hi - lo))
     spacing = 2.0 * half / texels
-    origin = middle - half + 0.5 * spacing
+    return middle - half + 0.5 * spacing, spacing
+
+
+def shadow_texture(centres: np.ndarray, radii: np.ndarray, cube, texels: int = SHADOW_TEXELS):
+    """The ground's remaining light fraction Π_i (1 − a_i) (grey, as RGB), on a texels² grid over SHADOW_EXTENT × the
+    spheres' footprint: (grid (T, T, 3), origin (x, z) of texel centre 0, spacing). One fragment per texel on the
+    GPU (shaders/shadow.frag; the map's mips and seamless filtering are GL's): what the document does on a phone,
+    and 0.9 s a frame in NumPy (:func:`shadow_texture_numpy`, its reference) where the map changes every frame."""
+    origin, spacing = _shadow_grid(centres, radii, texels)
+    faces = np.ascontiguousarray(capture._faces_of(cube), np.float32)
+    ctx = get_context()
+    owned = GLObjects(ctx)
+    try:
+        ctx.enable_direct(_SEAMLESS)
+        texture = owned.own(ctx.texture_cube(faces.shape[1:3][::-1], 3, faces.tobytes(), dtype="f4"))
+        texture.build_mipmaps()
+        texture.use(0)
+        spheres = np.concatenate([centres, radii[:, None]], axis=1).astype(np.float32)
+        owned.own(ctx.buffer(spheres.tobytes())).bind_to_storage_buffer(0)
+        target = owned.own(ctx.texture((texels, texels), 1, dtype="f4"))
+        fbo = owned.own(ctx.framebuffer(color_attachments=[target]))
+        fbo.use()
+        ctx.viewport = (0, 0, texels, texels)
+        program = get_program(ctx, SHADOW_PROGRAM)
+        set_uniforms(program, {"u_environment": 0, "u_origin": tuple(map(float, origin)), "u_spacing": spacing,
+                               "u_count": len(radii), "u_size": float(faces.shape[1]),
+                               "u_ambient": max(float(np.linalg.norm(ambient(cube))), 1e-12)})  # fmt: skip
+        owned.own(ctx.vertex_array(program, [])).render(vertices=3)
+        remaining = np.frombuffer(fbo.read(components=1, dtype="f4"), np.float32).reshape(texels, texels)
+    finally:
+        ctx.disable_direct(_SEAMLESS)
+        owned.release()
+    return np.repeat(remaining.astype(np.float64)[:, :, None], 3, axis=2), origin, spacing
+
+
+def shadow_texture_numpy(centres: np.ndarray, radii: np.ndarray, cube, texels: int = SHADOW_TEXELS):
+    """:func:`shadow_texture` in NumPy (float64, ``capture.lookup``): its reference."""
+    origin, spacing = _shadow_grid(centres, radii, texels)
     x = origin[0] + spacing * np.arange(texels)
     z = origin[1] + spacing * np.arange(texels)
     points = np.stack(np.broadcast_arrays(x[None, :], 0.0, z[:, None]), axis=-1).reshape(-1, 3)
