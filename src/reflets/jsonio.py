@@ -7,7 +7,8 @@ are NaN, a benchmark row without a preparation step has no ``prepare_ms``). :fun
 them as ``null`` and then encodes with ``allow_nan=False``, so that no non-finite number can slip through.
 
 NumPy scalars and arrays are turned into plain Python values on the way (``np.float32`` is not JSON
-serialisable by itself). Only the standard library and NumPy are imported: any module may use this one.
+serialisable by itself). Only the standard library and NumPy are imported at module level: any module may use
+this one.
 """
 
 from __future__ import annotations
@@ -65,7 +66,10 @@ def dumps(obj: Any, **kw: Any) -> str:
 
 
 def write(path: str | Path, obj: Any, **kw: Any) -> Path:
-    """Write :func:`dumps` of ``obj`` (UTF-8) to ``path``; returns the path."""
+    """Write :func:`dumps` of ``obj`` (UTF-8) to ``path`` atomically (a failed write leaves what was there);
+    returns the path."""
+    from .imageio import atomic_write
+
     path = Path(path)
-    path.write_text(dumps(obj, **kw), encoding="utf-8")
+    atomic_write(path, dumps(obj, **kw).encode("utf-8"))
     return path
