@@ -277,23 +277,26 @@ def _read_ldr(path: Path) -> np.ndarray:
     grey ones at 16 bits (``convert("RGB")`` drops the low byte of RGB / RGBA / grey + alpha ones)."""
     from PIL import Image
 
-    header = _png_header(path)
-    gamma = None
     try:
-        if header is not None and header[2] == 16:
-            encoded, gamma = _read_png16(path, header)
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ImageError(f"cannot read file ({exc.strerror or exc})", file=path) from exc
+    header = _png_header(data)
+    sixteen = header is not None and header[2] == 16
+    if sixteen and header[0] * header[1] > _MAX_PNG_PIXELS:  # Pillow checks the others itself
+        raise ImageError(
+            f"{header[0]}x{header[1]} pixels exceed the limit of {_MAX_PNG_PIXELS} (a decompression bomb?)", file=path
+        )
+    try:
+        if sixteen:
+            encoded, gamma = _read_png16(data)
         else:
-            with Image.open(path) as im:
+            with Image.open(io.BytesIO(data)) as im:
                 im.load()
                 gamma = im.info.get("gamma") if "srgb" not in im.info and "icc_profile" not in im.info else None
-                if im.mode in ("I;16", "I;16L", "I;16B", "I"):  # 16-bit grey TIFF-like data Pillow may hand back
-                    encoded = np.asarray(im, dtype=np.float64) / 65535.0
-                    encoded = np.repeat(encoded[:, :, None], 3, axis=2)
-                else:  # a palette with transparency goes through RGBA, as Pillow asks; alpha is dropped after
-                    full = im.convert("RGBA") if im.mode in ("P", "PA") else im.convert("RGB")
-                    encoded = np.asarray(full, dtype=np.float64)[:, :, :3] / 255.0
-    except ImageError:
-        raise
+                # a palette with transparency goes through RGBA, as Pillow asks; alpha is dropped after
+                full = im.convert("RGBA") if im.mode in ("P", "PA") else im.convert("RGB")
+                encoded = np.asarray(full, dtype=np.float64)[:, :, :3] / 255.0
     except Exception as exc:  # UnidentifiedImageError, OSError (truncated), DecompressionBombError, png errors...
         raise ImageError(f"cannot decode image ({exc})", file=path) from exc
     return _decode_transfer(np.clip(encoded, 0.0, 1.0), gamma)
@@ -304,42 +307,29 @@ _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _MAX_PNG_PIXELS = 2 * 89_478_485
 
 
-def _png_header(path: Path) -> tuple[int, int, int, int] | None:
+def _png_header(data: bytes) -> tuple[int, int, int, int] | None:
     """(width, height, bit depth, colour type) from a PNG's IHDR, or None for other files."""
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(29)
-    except OSError as exc:
-        raise ImageError(f"cannot read file ({exc.strerror or exc})", file=path) from exc
-    if len(head) < 29 or not head.startswith(_PNG_SIGNATURE) or head[12:16] != b"IHDR":
+    if len(data) < 29 or not data.startswith(_PNG_SIGNATURE) or data[12:16] != b"IHDR":
         return None
-    width, height = int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
-    return width, height, head[24], head[25]
+    return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big"), data[24], data[25]
 
 
-def _read_png16(path: Path, header: tuple[int, int, int, int]) -> tuple[np.ndarray, float | None]:
+def _read_png16(data: bytes) -> tuple[np.ndarray, float | None]:
     """Codes in [0, 1] (H, W, 3) of a 16-bit PNG of any colour type, and its gAMA value unless sRGB/iCCP say
     otherwise."""
     import png
 
-    width, height = header[:2]
-    if width * height > _MAX_PNG_PIXELS:
-        raise ImageError(
-            f"{width}x{height} pixels exceed the limit of {_MAX_PNG_PIXELS} (a decompression bomb?)", file=path
-        )
-    reader = png.Reader(filename=str(path))
-    width, height, rows, info = reader.asDirect()  # palette and tRNS expanded, sBIT honoured
+    width, height, rows, info = png.Reader(bytes=data).asDirect()  # palette and tRNS expanded, sBIT honoured
     planes = info["planes"]
     codes = np.vstack([np.asarray(row, dtype=np.uint16) for row in rows]).reshape(height, width, planes)
     colour = codes[:, :, :3] if planes >= 3 else np.repeat(codes[:, :, :1], 3, axis=2)  # alpha dropped
     maximum = float(2 ** info["bitdepth"] - 1)
-    gamma = None if _png_has_colour_space_chunk(path) else info.get("gamma")
+    gamma = None if _png_has_colour_space_chunk(data) else info.get("gamma")
     return colour.astype(np.float64) / maximum, gamma
 
 
-def _png_has_colour_space_chunk(path: Path) -> bool:
+def _png_has_colour_space_chunk(data: bytes) -> bool:
     """True if the PNG declares sRGB or an ICC profile (either overrides gAMA, per the PNG specification)."""
-    data = path.read_bytes()
     pos = 8
     while pos + 8 <= len(data):
         length, kind = int.from_bytes(data[pos : pos + 4], "big"), data[pos + 4 : pos + 8]

@@ -78,6 +78,8 @@ _window = None  # (context, thread) a window handed over
 _local = threading.local()  # this thread's EGL context, in a holder whose finaliser releases it
 _lock = threading.RLock()
 _stores: dict[int, dict[str, object]] = {}  # id(context) → named caches of that context's GL objects
+_owners: dict[int, threading.Thread] = {}  # id(EGL context) → the thread it is current on
+_software_turn = threading.RLock()  # what renders on a software rasteriser take turns on (``turn``)
 _environment_ready = False
 
 
@@ -106,9 +108,6 @@ def get_context():
         holder = _Holder(_egl_context())
         _local.holder = holder
     return holder.ctx
-
-
-_software_turn = threading.RLock()
 
 
 def turn(ctx):
@@ -161,9 +160,6 @@ def check_thread(ctx, what: str) -> None:
     )
 
 
-_owners: dict[int, threading.Thread] = {}
-
-
 class _Holder:
     """Owns one thread's EGL context; the thread's local storage holds it, so it goes when the thread ends."""
 
@@ -178,10 +174,8 @@ def _release(ctx) -> None:
     with _lock:
         _owners.pop(id(ctx), None)
         forget_context(ctx)
-    try:
+    with contextlib.suppress(Exception):  # the context went with its thread already
         ctx.release()
-    except Exception:  # the context went with its thread already
-        pass
 
 
 def _egl_context():

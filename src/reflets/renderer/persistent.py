@@ -112,7 +112,7 @@ class Renderer:
             self._check_thread()
         self.scene = scene
         self._accumulated = None
-        if not self._stale and not self._camera_moved():
+        if not self._stale and not self._move_camera():
             self._stale = True
 
     def set_light(self, index: int, **fields: Any) -> None:
@@ -159,7 +159,8 @@ class Renderer:
         self.release()
 
     # ------------------------------------------------------------------ internals
-    def _camera_moved(self) -> bool:
+    def _move_camera(self) -> bool:
+        """The technique moves its camera without preparing again, or says it cannot (False)."""
         with turn(self._ctx):
             return self._technique.set_camera(self.scene.camera)
 
