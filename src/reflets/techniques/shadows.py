@@ -370,7 +370,9 @@ def cascade_spheres(camera, centre: np.ndarray, radius: float, count: int = CASC
     would be coarser than a pixel at the camera's point of interest (``look_at``); none otherwise. The depths
     the scene's sphere allows, at most ``CASCADE_RANGE`` far / near, are split logarithmically into ``count``
     slices (each as many pixels per texel), the last left to the whole scene's view, stopping at a slice half
-    as wide as the scene."""
+    as wide as the scene. A scene deeper than ``CASCADE_RANGE`` times the point of interest's distance (a ground
+    plane to the horizon) takes the range of that ratio centred on it (log scale) instead of its far end: the
+    near objects keep fine slices."""
     eye = np.asarray(camera.position, np.float64)
     forward = np.asarray(camera.look_at, np.float64) - eye
     focus = float(np.linalg.norm(forward))
@@ -381,7 +383,10 @@ def cascade_spheres(camera, centre: np.ndarray, radius: float, count: int = CASC
         return []
     depth = float(np.dot(centre - eye, forward))
     z1 = depth + radius
-    z0 = max(depth - radius, z1 / CASCADE_RANGE, clip_planes_of_sphere(eye, centre, radius)[0])
+    if z1 > CASCADE_RANGE * focus:  # a scene far deeper than the view's point of interest (ground to the horizon):
+        z0, z1 = focus / math.sqrt(CASCADE_RANGE), focus * math.sqrt(CASCADE_RANGE)  # slices around the focus
+    else:
+        z0 = max(depth - radius, z1 / CASCADE_RANGE, clip_planes_of_sphere(eye, centre, radius)[0])
     if z1 <= z0:
         return []
     k2 = tan_half**2 * (1.0 + (width / height) ** 2)  # (distance of a corner from the axis / depth)²
