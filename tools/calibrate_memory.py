@@ -1,9 +1,10 @@
-"""Estimated against measured memory for the two largest estimates of reflets.resources: Fermat's ``subdivide`` and
-the scratch table's size (docs/inputs-and-outputs.md, calibration). Each measurement runs in a fresh process and
-reads its own peak resident memory (VmHWM): the growth over the same run at subdivide = 1, and a table's growth
-over the process before it is built.
+"""Estimated against measured memory for estimates of reflets.resources (docs/inputs-and-outputs.md, calibration):
+Fermat's ``subdivide``, the scratch table's size, a frame's bytes per sample and an image write's bytes per pixel.
+Each measurement runs in a fresh process and reads its own peak resident memory (VmHWM): the growth over the same
+run at subdivide = 1, a table's or a write's growth over the process before it, and the growth of a render between
+two sizes over the samples it adds.
 
-    python tools/calibrate_memory.py                 # subdivide 10 20 40, tables 512 and 1024 (about a minute)
+    python tools/calibrate_memory.py                 # the defaults below (about 20 s here)
     python tools/calibrate_memory.py --subdivide 10 20 40 60 80 --tables 512 1024
 """
 
@@ -14,6 +15,7 @@ import subprocess
 import sys
 
 TEAPOT = "src/reflets/data/scenes/40_reflect_teapot_sphere.toml"
+PLANE = "src/reflets/data/scenes/01_plane_point.toml"
 
 _PEAK = "int([l for l in open('/proc/self/status') if l.startswith('VmHWM')][0].split()[1]) * 1024"
 _SUBDIVIDE = f"""
@@ -32,6 +34,22 @@ print({_PEAK} - before)
 """
 
 
+_FRAME = f"""
+import sys, reflets
+reflets.render({PLANE!r}, method="forward", size=(int(sys.argv[1]), int(sys.argv[1])))
+print({_PEAK})
+"""
+_WRITE = f"""
+import sys, numpy as np
+from reflets.imageio import write_image
+write_image(sys.argv[1], np.zeros((2, 2, 3), np.float32))  # the format's libraries imported first
+image = np.random.default_rng(0).random((2048, 2048, 3), dtype=np.float32)  # noise: the least compressible
+before = {_PEAK}
+write_image(sys.argv[1], image)
+print({_PEAK} - before)
+"""
+
+
 def _run(code: str, *args) -> int:
     out = subprocess.run([sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True, check=True)
     return int(out.stdout.split()[-1])
@@ -41,6 +59,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--subdivide", type=int, nargs="*", default=[10, 20, 40])
     parser.add_argument("--tables", type=int, nargs="*", default=[512, 1024])
+    parser.add_argument("--frames", type=int, nargs=2, default=[1024, 2048], help="two square render sizes")
+    parser.add_argument("--writes", nargs="*", default=[".png", ".hdr", ".exr", ".npy"])
     args = parser.parse_args()
 
     import reflets
@@ -62,6 +82,22 @@ def main() -> None:
     print("|---|---|---|")
     for size in args.tables:
         print(f"| {size} | {table_bytes(size, 200, 1, 'numpy') / 1e6:.0f} | {_run(_TABLE, size) / 1e6:.0f} |")
+
+    import tempfile
+
+    from reflets.imageio import WRITE_BYTES_PER_PIXEL
+    from reflets.techniques.forward import FRAME_BYTES_PER_SAMPLE
+
+    small, large = args.frames
+    per_sample = (_run(_FRAME, large) - _run(_FRAME, small)) / (large * large - small * small)
+    print(f"\nframe ({small}² → {large}², forward, 1 spp): {per_sample:.1f} B per sample "
+          f"(estimate {FRAME_BYTES_PER_SAMPLE})")  # fmt: skip
+    print("\n| write (2048² noise) | estimate (B/px) | measured (B/px) |")
+    print("|---|---|---|")
+    with tempfile.TemporaryDirectory() as folder:
+        for ext in args.writes:
+            grown = _run(_WRITE, f"{folder}/out{ext}") / 2048**2
+            print(f"| {ext} | {WRITE_BYTES_PER_PIXEL[ext]} | {grown:.1f} |")
 
 
 if __name__ == "__main__":

@@ -4,8 +4,7 @@ scenes of `reflets bench translucency`, without the benchmark's 38 minutes: the 
 and η = 1.3 (1024×768) against the references stored under benchmarks/results/references/, and an
 index-matched 10 mm skin1 sphere against a fresh 32-spp volumetric reference (128×96).
 
-The stored references are read directly: their fingerprints predate the camera's principal_offset and
-pixel_aspect fields (defaults, no effect on the image), so reflets.reference.store would render them again.
+The stored references are found by their fingerprints (reflets.reference.store.load), as the benchmark does.
 
 Run: ``.venv/bin/python tools/translucency_ratios.py [--sphere]`` (about a minute; the sphere one more).
 """
@@ -18,20 +17,23 @@ from pathlib import Path
 import numpy as np
 
 import reflets
-from reflets.bench.translucency import _compared_pixels, _object_scene
+from reflets.bench.translucency import _compared_pixels, _object_scene, _relmse
 from reflets.reference import store
 from reflets.reference.volumetric import VolumetricImage, render_volumetric
 
 ROOT = Path(__file__).resolve().parents[1]
-BUNNIES = {
-    1.0: ("translucency_bunny_eta1_384x288_48spp.npz", (384, 288)),
-    1.3: ("translucency_bunny_eta1.3_1024x768_32spp.npz", (1024, 768)),
+BUNNIES = {  # η: (stored reference, size, its spp and seed)
+    1.0: ("translucency_bunny_eta1_384x288_48spp.npz", (384, 288), 48, 7),
+    1.3: ("translucency_bunny_eta1.3_1024x768_32spp.npz", (1024, 768), 32, 11),
 }
 PROFILES = ("multiple_fit", "better_dipole", "dipole", "normalized_diffusion")
 
 
-def stored(name: str) -> VolumetricImage:
-    return store.read(ROOT / "benchmarks/results/references" / name)[0]
+def stored(name: str, scene, spp: int, seed: int) -> VolumetricImage:
+    found = store.load(ROOT / "benchmarks/results/references" / name, store.fingerprint(scene, spp=spp, seed=seed)[0])
+    if found is None:
+        raise SystemExit(f"{name}: no stored reference for this scene (run `reflets bench translucency`)")
+    return found[0]
 
 
 def report(label: str, scene_for, ref: VolumetricImage, pixels) -> None:
@@ -39,7 +41,7 @@ def report(label: str, scene_for, ref: VolumetricImage, pixels) -> None:
     for profile in PROFILES:
         image = reflets.render(scene_for(profile), method="translucent", terms=["single", "multiple"])
         ratio = image[keep].mean(axis=0) / ref.image[keep].mean(axis=0)
-        relmse = float(np.mean((image[keep] - ref.image[keep]) ** 2) / np.mean(ref.image[keep] ** 2))
+        relmse = _relmse(image, ref.image, keep)
         ratios = ", ".join(f"{v:.3f}" for v in ratio)
         print(f"{label} | {profile} | {ratios} | {relmse:.2%} (reference noise {noise:.2%})", flush=True)
 
@@ -62,12 +64,13 @@ def main() -> None:
     parser.add_argument("--sphere", action="store_true", help="also the 10 mm sphere (renders its reference)")
     args = parser.parse_args()
     print("scene | profile | mean ratio R, G, B | relative MSE")
-    for eta, (name, size) in BUNNIES.items():
-        ref = stored(name)
-        keep, _, noise = _compared_pixels(ref)
+    for eta, (name, size, spp, seed) in BUNNIES.items():
 
         def bunny(profile, eta=eta, size=size):
             return _object_scene("bunny.ply", "skin1", 100.0, size, eta=eta, profile=profile)
+
+        ref = stored(name, bunny("multiple_fit"), spp, seed)
+        keep, _, noise = _compared_pixels(ref)
 
         report(f"bunny η = {eta:g}, {size[0]}×{size[1]}", bunny, ref, (keep, noise))
     if args.sphere:

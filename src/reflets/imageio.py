@@ -273,28 +273,21 @@ def _read_npy(path: Path) -> np.ndarray:
 
 
 def _read_ldr(path: Path) -> np.ndarray:
-    """PNG and JPEG: display-referred codes → linear. 16-bit PNGs go through pypng, because Pillow keeps only
-    grey ones at 16 bits (``convert("RGB")`` drops the low byte of RGB / RGBA / grey + alpha ones)."""
+    """PNG and JPEG: display-referred codes → linear. Pillow opens every file (its chunks, ``gAMA`` / ``sRGB`` /
+    ``iCCP`` among them, and its decompression-bomb check); 16-bit PNGs are decoded by pypng, because Pillow keeps
+    only grey ones at 16 bits (``convert("RGB")`` drops the low byte of RGB / RGBA / grey + alpha ones)."""
     from PIL import Image
 
     try:
         data = path.read_bytes()
     except OSError as exc:
         raise ImageError(f"cannot read file ({exc.strerror or exc})", file=path) from exc
-    header = _png_header(data)
-    sixteen = header is not None and header[2] == 16
-    if sixteen and header[0] * header[1] > _MAX_PNG_PIXELS:  # Pillow checks the others itself
-        raise ImageError(
-            f"{header[0]}x{header[1]} pixels exceed the limit of {_MAX_PNG_PIXELS} (a decompression bomb?)", file=path
-        )
     try:
-        if sixteen:
-            encoded, gamma = _read_png16(data)
-        else:
-            with Image.open(io.BytesIO(data)) as im:
-                im.load()
-                gamma = im.info.get("gamma") if "srgb" not in im.info and "icc_profile" not in im.info else None
-                # a palette with transparency goes through RGBA, as Pillow asks; alpha is dropped after
+        with Image.open(io.BytesIO(data)) as im:
+            gamma = im.info.get("gamma") if "srgb" not in im.info and "icc_profile" not in im.info else None
+            if data.startswith(_PNG_SIGNATURE) and data[12:16] == b"IHDR" and data[24] == 16:  # IHDR bit depth
+                encoded = _read_png16(data)
+            else:  # a palette with transparency goes through RGBA, as Pillow asks; alpha is dropped after
                 full = im.convert("RGBA") if im.mode in ("P", "PA") else im.convert("RGB")
                 encoded = np.asarray(full, dtype=np.float64)[:, :, :3] / 255.0
     except Exception as exc:  # UnidentifiedImageError, OSError (truncated), DecompressionBombError, png errors...
@@ -303,42 +296,17 @@ def _read_ldr(path: Path) -> np.ndarray:
 
 
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-#: Pillow's decompression-bomb threshold, kept for the 16-bit reader too (2 x Image.MAX_IMAGE_PIXELS)
-_MAX_PNG_PIXELS = 2 * 89_478_485
 
 
-def _png_header(data: bytes) -> tuple[int, int, int, int] | None:
-    """(width, height, bit depth, colour type) from a PNG's IHDR, or None for other files."""
-    if len(data) < 29 or not data.startswith(_PNG_SIGNATURE) or data[12:16] != b"IHDR":
-        return None
-    return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big"), data[24], data[25]
-
-
-def _read_png16(data: bytes) -> tuple[np.ndarray, float | None]:
-    """Codes in [0, 1] (H, W, 3) of a 16-bit PNG of any colour type, and its gAMA value unless sRGB/iCCP say
-    otherwise."""
+def _read_png16(data: bytes) -> np.ndarray:
+    """Codes in [0, 1] (H, W, 3) of a 16-bit PNG of any colour type (alpha dropped)."""
     import png
 
     width, height, rows, info = png.Reader(bytes=data).asDirect()  # palette and tRNS expanded, sBIT honoured
     planes = info["planes"]
     codes = np.vstack([np.asarray(row, dtype=np.uint16) for row in rows]).reshape(height, width, planes)
-    colour = codes[:, :, :3] if planes >= 3 else np.repeat(codes[:, :, :1], 3, axis=2)  # alpha dropped
-    maximum = float(2 ** info["bitdepth"] - 1)
-    gamma = None if _png_has_colour_space_chunk(data) else info.get("gamma")
-    return colour.astype(np.float64) / maximum, gamma
-
-
-def _png_has_colour_space_chunk(data: bytes) -> bool:
-    """True if the PNG declares sRGB or an ICC profile (either overrides gAMA, per the PNG specification)."""
-    pos = 8
-    while pos + 8 <= len(data):
-        length, kind = int.from_bytes(data[pos : pos + 4], "big"), data[pos + 4 : pos + 8]
-        if kind in (b"sRGB", b"iCCP"):
-            return True
-        if kind == b"IDAT":
-            return False  # colour-space chunks must come before the image data
-        pos += 12 + length
-    return False
+    colour = codes[:, :, :3] if planes >= 3 else np.repeat(codes[:, :, :1], 3, axis=2)
+    return colour.astype(np.float64) / float(2 ** info["bitdepth"] - 1)
 
 
 def _decode_transfer(encoded: np.ndarray, gamma: float | None) -> np.ndarray:

@@ -147,13 +147,8 @@ def check(
 
 # ---------------------------------------------------------------------------------------------- the sources
 def _meminfo() -> Budget | None:
-    try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemAvailable:"):
-                return Budget(int(line.split()[1]) * 1024, "MemAvailable")
-    except (OSError, ValueError, IndexError):
-        pass
-    return None
+    available = _proc_kb("/proc/meminfo", "MemAvailable")
+    return None if available is None else Budget(available, "MemAvailable")
 
 
 def _read_int(path: Path) -> int | None:
@@ -222,15 +217,16 @@ def _address_space() -> Budget | None:
         return None
     if soft == resource.RLIM_INFINITY or soft < 0:
         return None
-    size = _stat_kb("VmSize")
+    size = _proc_kb("/proc/self/status", "VmSize") or 0
     return Budget(max(soft - size, 0), "RLIMIT_AS")
 
 
-def _stat_kb(key: str) -> int:
+def _proc_kb(path: str, key: str) -> int | None:
+    """Bytes of a ``Key: N kB`` line of a /proc file (None where it cannot be read)."""
     try:
-        for line in Path("/proc/self/status").read_text().splitlines():
+        for line in Path(path).read_text().splitlines():
             if line.startswith(key + ":"):
                 return int(line.split()[1]) * 1024
     except (OSError, ValueError, IndexError):
         pass
-    return 0
+    return None

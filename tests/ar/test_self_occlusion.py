@@ -134,13 +134,23 @@ def test_a_torus_matches_ray_casting_with_the_same_directions(ctx):
 
 
 def test_constant_environment_gives_p_v_times_the_radiance(ctx):
-    """The document's diffuse term under a constant sky L: E = (P_V/π) Σ_F L W_F(n) = P_V L with the exact face
-    weights (Σ_F W_F = π)."""
-    mesh = shapes.torus(1.0, 0.5, (24, 12))
-    p_v = self_occlusion(mesh.positions, mesh.normals, mesh.indices, 200, resolution=128)
-    radiance = 0.7
-    irradiance = p_v / np.pi * (radiance * face_weights_exact(mesh.normals)).sum(axis=1)
-    np.testing.assert_allclose(irradiance, p_v * radiance, rtol=1e-6, atol=1e-7)
+    """The document's diffuse term (``vertex_diffuse``) under a constant sky L: k_d (P_V/π) Σ_F L W_F(n) = k_d P_V L
+    with the exact face weights (Σ_F W_F = π)."""
+    from reflets.ar import capture
+    from reflets.ar.document import ObjectGeometry, vertex_diffuse
+    from reflets.scene import load_dict
+
+    albedo = np.array([0.7, 0.5, 0.3])
+    scene = load_dict({
+        "camera": {"position": [0, 2, 3], "look_at": [0, 0, 0]},
+        "materials": {"clay": {"type": "lambert", "albedo": albedo.tolist()}},
+        "mesh": [{"shape": "torus", "major": 1.0, "minor": 0.5, "segments": [24, 12], "material": "clay"}],
+    })  # fmt: skip
+    g = ObjectGeometry.of(scene)
+    p_v = self_occlusion(g.positions, g.normals, g.faces, 200, resolution=128)
+    radiance = np.array([0.7, 0.9, 1.1])
+    diffuse = vertex_diffuse(g, scene, capture.CubeMap.constant(8, radiance), p_v, face_weights_exact(g.normals))
+    np.testing.assert_allclose(diffuse, albedo * p_v[:, None] * radiance, rtol=1e-5, atol=1e-7)
     assert p_v.min() < 0.9 < p_v.max()
 
 

@@ -157,7 +157,7 @@ class Compositor:
             on_object &= rgba[:, 3] > 0.5
             object_radiance = rgba[:, :3]
         t1 = time.perf_counter()
-        linear_photo = capture.decode_response(photo / 255.0, self.response)
+        linear_photo = capture.decode_response(np.arange(256) / 255.0, self.response)[photo]  # a table of codes
         sub = np.repeat(np.repeat(linear_photo, s, axis=0), s, axis=1).reshape(-1, 3) * ratio
         sub[on_object] = exposure * object_radiance.reshape(-1, 3)[on_object]
         linear = sub.reshape(height, s, width, s, 3).mean(axis=(1, 3))
@@ -228,7 +228,7 @@ class Compositor:
             self._shadow = (cube, shadow_texture(self.centres, self.radii, cube))
             timings["shadow_texture_ms"] = 1e3 * (time.perf_counter() - t0)
         t1 = time.perf_counter()
-        ratio[np.flatnonzero(on_ground)] = sample_shadow(*self._shadow[1], ground_points)
+        ratio[np.flatnonzero(on_ground)] = sample_shadow(*self._shadow[1], ground_points)[:, None]
         timings["shadow_ms"] = 1e3 * (time.perf_counter() - t1)
         t2 = time.perf_counter()
         diffuse = vertex_diffuse(self.geometry, self.objects, cube, self.occlusion, self.face_weights)

@@ -165,8 +165,8 @@ def _shadow_grid(centres: np.ndarray, radii: np.ndarray, texels: int) -> tuple[n
 
 
 def shadow_texture(centres: np.ndarray, radii: np.ndarray, cube, texels: int = SHADOW_TEXELS):
-    """The ground's remaining light fraction Π_i (1 − a_i) (grey, as RGB), on a texels² grid over SHADOW_EXTENT × the
-    spheres' footprint: (grid (T, T, 3), origin (x, z) of texel centre 0, spacing). One fragment per texel on the
+    """The ground's remaining light fraction Π_i (1 − a_i) (grey), on a texels² grid over SHADOW_EXTENT × the
+    spheres' footprint: (grid (T, T), origin (x, z) of texel centre 0, spacing). One fragment per texel on the
     GPU (shaders/shadow.frag; the map's mips and seamless filtering are GL's): what the document does on a phone,
     and 0.9 s a frame in NumPy (:func:`shadow_texture_numpy`, its reference) where the map changes every frame."""
     origin, spacing = _shadow_grid(centres, radii, texels)
@@ -193,7 +193,7 @@ def shadow_texture(centres: np.ndarray, radii: np.ndarray, cube, texels: int = S
     finally:
         ctx.disable_direct(_SEAMLESS)
         owned.release()
-    return np.repeat(remaining.astype(np.float64)[:, :, None], 3, axis=2), origin, spacing
+    return remaining.astype(np.float64), origin, spacing
 
 
 def shadow_texture_numpy(centres: np.ndarray, radii: np.ndarray, cube, texels: int = SHADOW_TEXELS):
@@ -215,19 +215,19 @@ def shadow_texture_numpy(centres: np.ndarray, radii: np.ndarray, cube, texels: i
         level = np.log2(np.maximum(n * radius / distance, 1e-6))
         local = np.linalg.norm(capture.lookup(cube, direction, level, chain=chain), axis=1)
         remaining *= 1.0 - np.clip(sin2 * cos_w * np.minimum(local / a_ambient, np.pi), 0.0, 1.0)
-    return np.repeat(remaining.reshape(texels, texels, 1), 3, axis=2), origin, spacing
+    return remaining.reshape(texels, texels), origin, spacing
 
 
 def sample_shadow(grid: np.ndarray, origin: np.ndarray, spacing: float, points: np.ndarray) -> np.ndarray:
-    """Bilinear lookup of the shadow texture at ground points (N, 3); 1 outside it."""
+    """Bilinear lookup of the (grey) shadow texture at ground points (N, 3): (N,), 1 outside it."""
     texels = grid.shape[0]
     fx = (points[:, 0] - origin[0]) / spacing
     fz = (points[:, 2] - origin[1]) / spacing
     inside = (fx >= 0) & (fx <= texels - 1) & (fz >= 0) & (fz <= texels - 1)
-    out = np.ones((len(points), 3))
+    out = np.ones(len(points))
     x0 = np.clip(np.floor(fx[inside]).astype(int), 0, texels - 2)
     z0 = np.clip(np.floor(fz[inside]).astype(int), 0, texels - 2)
-    tx, tz = (fx[inside] - x0)[:, None], (fz[inside] - z0)[:, None]
+    tx, tz = fx[inside] - x0, fz[inside] - z0
     out[inside] = ((1 - tz) * ((1 - tx) * grid[z0, x0] + tx * grid[z0, x0 + 1])
                    + tz * ((1 - tx) * grid[z0 + 1, x0] + tx * grid[z0 + 1, x0 + 1]))  # fmt: skip
     return out

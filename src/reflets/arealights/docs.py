@@ -54,24 +54,23 @@ and Blinn-Phong, Ward at α = 0.1 and 0.3). Results, with the machine they were 
 
 **Measured ordering** (full run, committed; 800×600 on llvmpipe, 2 cores, shared with other work while it
 ran, so single timings are noisy — compare within a row of the table, not across runs). On the document's
-scene (Phong e = 500): `ltc` 17.6 ms (relMSE 6.4e-5) < `biased` t = 0.99, 4² 194 ms (4.7e-6) < `adaptive`
-513 ms (170 samples/px, 4.4e-6) < `brute` 20² 682 ms (400 samples/px, 3.7e-6) < `mc` (MIS) 64 spp 988 ms
+scene (Phong e = 500): `ltc` 50.9 ms (relMSE 3.6e-6) < `biased` t = 0.99, 4² 123 ms (4.7e-6) < `adaptive`
+233 ms (170 samples/px, 4.4e-6) < `brute` 20² 448 ms (400 samples/px, 3.7e-6) < `mc` (MIS) 64 spp 620 ms
 (4.8e-5). The document found the same order of its four methods on its 2007 GPU — biased 220 fps, adaptive
 33, brute 12, Monte Carlo 3 — with a wider spread: on a SIMD software rasteriser the per-pixel grid sizes of
 `adaptive` and the cone bounds of `biased` cost more relative to a fixed loop than on the document's GPU.
-`ltc` is 4–40× faster than every sampling method at a relative MSE of 1e-4 … 6e-3, against a reference whose
-own noise floor is 1e-4 … 2e-4 at 256 spp.
+There the sampling methods that come within 10 % of `ltc`'s relative MSE (biased 8², adaptive with dither, brute
+20² and 32²) take 129–1,043 ms: 2.5–20× its time.
 
-**Beyond the document: `ltc` keeps the highlights' edges** (issue 18). The committed run above predates it:
-`ltc` then transformed the clamped cosine (now `base = "cosine"`), whose power-law tail cannot follow a
+**Beyond the document: `ltc` keeps the highlights' edges** (issue 18). `ltc` used to transform the clamped
+cosine (now `base = "cosine"`, beside it in the committed run), whose power-law tail cannot follow a
 Phong lobe — the largest error on the document's highlights was 11.35 / 10.72 / 9.89 % of the peak for
 e = 150 / 200 / 500, FLIP 0.442 / 0.459 / 0.422 against 0.040 / 0.039 / 0.030 for brute 8². The default base
 is now a per-cell mixture with cos³¹ whose tail is cut off outside its support: 0.51 / 0.61 / 0.70 % of the
 peak, FLIP 0.064 / 0.054 / 0.029, relative MSE 3.7e-5 / 2.2e-5 / 3.6e-6 (from 5.2e-4 / 3.5e-4 / 6.4e-5) —
-more accurate than brute 8² (1.90 / 2.58 / 8.96 %) by every measure but FLIP. These rows come from
-`python tools/bench_arealights_part.py OUT` (the `ltc`, `ltc base=cosine` and brute 8² rows of the suite;
-the whole suite takes over half an hour on this host and was not rerun); details and the other BRDFs in
-`ltc` below.
+more accurate than brute 8² (1.90 / 2.58 / 8.96 %) by every measure but FLIP — the rows of
+benchmarks/results/arealights.md (`python tools/bench_arealights_part.py OUT` makes just these rows in minutes,
+the whole suite takes over half an hour); details and the other BRDFs in `ltc` below.
 
 **`ltc` cost** (`reflets bench ltc-cost`: interleaved rounds in one run, GGX α = 0.3, one unit light,
 800×600, benchmarks/results/ltc-cost.md). On llvmpipe a frame's time is bimodal — two threads when the host

@@ -63,9 +63,8 @@ same command with ``--param base_power=31``) and the support cut-off removes the
 (α ≈ 0.3) the families gain less FLIP: a mixture of the powers 1 and 31 has no intermediate shape, and the
 few per cent of clamped cosine left in those cells' fits still glow over the dark plane. Cost: (n − 1)/2 = 15
 more recurrence steps per polygon edge. On llvmpipe the mixture shader ran no slower than the clamped-cosine
-one in every interleaved measurement of this session (Phong e = 500 at 800×600 in the run above: 54 ms
-against 77 ms); the host was shared, and this session's llvmpipe ran every ltc frame many times slower than the
-committed runs (the unchanged shader of before too), so these times compare only with each other.
+one in every interleaved measurement (Phong e = 500 at 800×600 in the committed run: 50.9 ms against 74.5 ms,
+benchmarks/results/arealights.md; the host was shared, so compare within the run only).
 
 A Lambertian term (``kd`` / ``diffuse`` / ``albedo``) is split off and integrated exactly (identity matrix);
 the table fits the rest of the BRDF. Ashikhmin–Shirley's coupled diffuse term and measured data are not

@@ -281,10 +281,10 @@ def theta_over_sin(x) -> np.ndarray:
     return np.where(x >= 0.0, r, np.pi / np.sqrt(np.maximum(1.0 - x * x, 1e-7)) - r)
 
 
-def support_cut(base_power: int, mass: float | None = None) -> float:
-    """cos of the cone about the base's axis holding all but ``mass`` (default SUPPORT_MASS) of the cosⁿ lobe:
+def support_cut(base_power: int) -> float:
+    """cos of the cone about the base's axis holding all but SUPPORT_MASS of the cosⁿ lobe:
     ∫_{z < t} (n + 1)/(2π) zⁿ dω = t^(n+1). 0 for the clamped cosine (no cut)."""
-    return 0.0 if base_power == 1 else float((SUPPORT_MASS if mass is None else mass) ** (1.0 / (base_power + 1)))
+    return 0.0 if base_power == 1 else float(SUPPORT_MASS ** (1.0 / (base_power + 1)))
 
 
 def power_edge_sum(a: np.ndarray, b: np.ndarray, base_power: int) -> tuple[float, float]:

@@ -13,10 +13,10 @@ import statistics
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
-from importlib import resources
 
 import numpy as np
 
+from ..demo import scene_path
 from ..gpu import context
 
 SCENES = ("01_plane_point.toml", "03_shapes.toml", "06_materials.toml", "20_arealight_phong.toml")
@@ -25,23 +25,7 @@ SCENES = ("01_plane_point.toml", "03_shapes.toml", "06_materials.toml", "20_area
 def _scenes():
     import reflets
 
-    folder = resources.files("reflets") / "data" / "scenes"
-    return [reflets.load_scene(folder / name) for name in SCENES]
-
-
-def _batch(scenes, size, workers: int) -> tuple[float, list[np.ndarray]]:
-    import reflets
-
-    def one(scene):
-        return reflets.render(scene, size=size)
-
-    t0 = time.perf_counter()
-    if workers == 1:
-        images = [one(scene) for scene in scenes]
-    else:
-        with ThreadPoolExecutor(max_workers=workers) as pool:
-            images = list(pool.map(one, scenes))
-    return time.perf_counter() - t0, images
+    return [reflets.load_scene(scene_path(name)) for name in SCENES]
 
 
 @contextlib.contextmanager
@@ -62,8 +46,8 @@ def bench_threads(quick: bool, out_dir) -> tuple[dict, str]:
     size = (160, 120) if quick else (320, 240)
     repeats = 2 if quick else 5
     scenes = _scenes() * 2  # 8 renders a batch
-    _batch(scenes, size, 1)  # programs compiled, tables fitted: the comparison is of warm renders
-    _, sequential = _batch(scenes, size, 1)
+    for _ in range(2):  # the first pass compiles programs and fits tables: the comparison is of warm renders
+        sequential = [reflets.render(scene, size=size) for scene in scenes]
 
     first = {}  # a new thread's first render against a warm one on the main thread
 

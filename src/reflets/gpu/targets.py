@@ -77,8 +77,12 @@ class TargetCache:
     def __init__(self):
         self.target: HDRTarget | None = None
 
-    def get(self, ctx, width: int, height: int) -> HDRTarget:
+    def get(self, ctx, width: int, height: int, check=None) -> HDRTarget:
+        """The target at this size; ``check()`` runs first when one must be made (a size or memory check: not on
+        every frame of a loop)."""
         if self.target is None or self.target.size != (int(width), int(height)):
+            if check is not None:
+                check()
             self.release()
             self.target = HDRTarget(ctx, width, height)
         return self.target

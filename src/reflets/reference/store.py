@@ -95,7 +95,7 @@ def load(path: Path, digest: str):
 
 
 def read(path: Path):
-    """The stored image and its compute time, whatever it was made for (tools that know what they read)."""
+    """The stored image and its compute time, whatever it was made for (``load`` checks the fingerprint first)."""
     from .volumetric import VolumetricImage
 
     with np.load(path) as data:

@@ -342,7 +342,7 @@ def _check_memory(scene, workers: int, refract) -> None:
     per_pixel, fixed = _memory_terms(scene, workers, refract)
     check(
         "size",
-        fixed + width * height * per_pixel,
+        volumetric_bytes(scene, None, workers, refract),
         value=f"{width}x{height}",
         what=f"the volumetric reference: {width * height:,} pixels × {per_pixel:,} B"
         + (f" over {workers} processes and this one" if workers > 1 else ""),

@@ -184,6 +184,12 @@ def emitter_mesh(light: QuadLight | PolygonLight) -> MeshData:
 RASTER_BYTES = 64_000_000
 
 
+def split_size(triangles: int, vertices: int, k: int) -> tuple[int, int]:
+    """(vertices, triangles) of a mesh split k: T (k + 1)(k + 2) / 2 and T k² (edges duplicated per triangle), or
+    the mesh itself for k ≤ 1."""
+    return (triangles * (k + 1) * (k + 2) // 2, triangles * k * k) if k > 1 else (vertices, triangles)
+
+
 def subdivision_bytes(meshes: list[tuple[int, int, int]], reflectors: int) -> int:
     """Peak bytes ``Fermat.prepare`` allocates for the reflected meshes, each (T triangles, N vertices, split k),
     drawn once per reflector — an upper bound from the arrays it makes. A mesh split k > 1 has
@@ -206,7 +212,7 @@ def subdivision_bytes(meshes: list[tuple[int, int, int]], reflectors: int) -> in
     k = 10 / 20 / 40 / 60 / 80 (90 / 159 / 443 / 978 / 1,721 MB estimated)."""
     kept = phase_a = upload = buffers = 0
     for t, n, k in meshes:
-        v, f = (t * (k + 1) * (k + 2) // 2, t * k * k) if k > 1 else (n, t)
+        v, f = split_size(t, n, k)
         if k > 1:
             phase_a = max(phase_a, kept + max(164 * v + 24 * f, 140 * v + 36 * f) + 96 * t + 64 * (k + 1) ** 2)
             kept += 48 * v + 12 * f
@@ -254,7 +260,7 @@ class Fermat(Forward):
             raise ArgumentError(
                 "the fermat method needs a mesh with reflector = true (and a mirror material)", field="mesh"
             )
-        self._check_memory(scene)
+        splits = iter(self._check_memory(scene))  # k per reflected mesh, emitters last, in the order drawn below
         super().prepare(scene)
         ctx = self.ctx
         self._lobes = ScratchLobes(self.prepared, scene)  # reflected scratched meshes: their lobes, default sampling
@@ -267,7 +273,6 @@ class Fermat(Forward):
         meshes = self.prepared.meshes
         ids = {r.index: k + 1 for k, r in enumerate(self._reflectors)}
         bounds = [bounding_sphere(meshes[r.index].positions.astype(np.float64)) for r in self._reflectors]
-        centres = [centre for centre, _ in bounds]
         gbuffer = get_program(ctx, GBUFFER_PROGRAM)
         self._gbuffer_draws = []  # (vao, reflector id)
         self._reflected_meshes = []  # (mesh data subdivided, material)
@@ -275,7 +280,7 @@ class Fermat(Forward):
         for index, (mesh, data) in enumerate(zip(scene.mesh, meshes, strict=True)):
             self._gbuffer_draws.append((self.mesh_vertex_array(gbuffer, index), float(ids.get(index, 0))))
             if index not in ids:
-                k = self._subdivision(data, centres)
+                k = next(splits)
                 self.subdivisions.append(k)
                 self._reflected_meshes.append((data.subdivided(k), scene.materials[mesh.material]))
         self._reflected_emitters = []
@@ -285,7 +290,7 @@ class Fermat(Forward):
                 data = emitter_mesh(light)
                 points.append(data.positions)
                 self._gbuffer_draws.append((self.mesh_vertex_array(gbuffer, data), 0.0))
-                k = self._subdivision(data, centres)
+                k = next(splits)
                 self.subdivisions.append(k)
                 self._reflected_emitters.append((data.subdivided(k), light))
         self._depth_range = 4.0 * bounding_sphere(np.concatenate(points))[1]
@@ -305,10 +310,11 @@ class Fermat(Forward):
             self._objects.append(vao)
             self._composites.append((program, vao, material.uniforms(), size))
 
-    def _check_memory(self, scene: Scene) -> None:
+    def _check_memory(self, scene: Scene) -> list[int]:
         """Refuse a ``subdivide`` whose reflected meshes would not fit in the available memory (reflets.resources:
         one line naming it, the estimate of :func:`subdivision_bytes`, the limit and the largest k that fits),
-        before anything is allocated: the meshes come from the content-keyed cache the prepared scene reads."""
+        before anything is allocated: the meshes come from the content-keyed cache the prepared scene reads.
+        Returns the k of each reflected mesh (the scene's in order, then the emitters'), for ``prepare``."""
         meshes = [mesh_data(scene, i) for i in range(len(scene.mesh))]
         reflectors = [i for i, mesh in enumerate(scene.mesh) if mesh.reflector]
         centres = [bounding_sphere(meshes[i].positions.astype(np.float64))[0] for i in reflectors]
@@ -316,8 +322,8 @@ class Fermat(Forward):
         reflected += [emitter_mesh(light) for light in scene.light if isinstance(light, QuadLight | PolygonLight)]
         counts = [(data.n_triangles, data.n_vertices, self._subdivision(data, centres)) for data in reflected]
         if not counts:
-            return
-        vertices = sum(t * (k + 1) * (k + 2) // 2 if k > 1 else n for t, n, k in counts)
+            return []
+        vertices = sum(split_size(t, n, k)[0] for t, n, k in counts)
 
         def fits(budget: int) -> int | None:
             def estimate(k: int) -> int:
@@ -333,6 +339,7 @@ class Fermat(Forward):
             fits=fits,
             advice="lower it" if self.params.subdivide != "auto" else "raise max_angle, or give subdivide = k",
         )
+        return [k for _, _, k in counts]
 
     def _subdivision(self, data: MeshData, centres: list[np.ndarray]) -> int:
         """k for one mesh: the given one, or (auto) the smallest making every triangle's longest edge span at

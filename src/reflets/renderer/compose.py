@@ -239,11 +239,13 @@ class Auto(Technique):
             raise RuntimeError("call prepare(scene) before render()")
         n_frames, s = self.frames(self.default_spp if spp is None else spp)
         width, height = size or self.scene.camera.size
-        check_target_size(self.ctx, width, height, s, sum(t.screen_bytes_per_sample() for _, t in self.passes))
         view, proj = self.final.camera_matrices(width, height)
         view_proj = proj @ view
         vp_bytes = view_proj.T.astype(np.float32).tobytes()
-        target = self._targets.get(self.ctx, width * s, height * s)
+        extra = sum(t.screen_bytes_per_sample() for _, t in self.passes)
+        target = self._targets.get(
+            self.ctx, width * s, height * s, lambda: check_target_size(self.ctx, width, height, s, extra)
+        )
         total = None
         for frame in range(first_frame, first_frame + n_frames):
             with self.timer.frame():

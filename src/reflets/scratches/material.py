@@ -380,8 +380,10 @@ def check_alpha_size(material: Scratched) -> None:
 def cached_alpha(material: Scratched) -> np.ndarray:
     if material.coverage is not None:
         return np.full((material.layer_count, 1, 1), material.coverage, np.float32)
-    check_alpha_size(material)
-    return ALPHAS.get(alpha_key(material), lambda: bake_alpha(material))
+    key = alpha_key(material)
+    if ALPHAS.peek(key) is None:  # before it is read or baked; not on every lookup of maps already in memory
+        check_alpha_size(material)
+    return ALPHAS.get(key, lambda: bake_alpha(material))
 
 
 # ---------------------------------------------------------------------------------------------- α maps

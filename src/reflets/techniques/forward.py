@@ -378,11 +378,12 @@ class Forward(Technique):
         ctx = self.ctx
         n_frames, s = self.frames(self.default_spp if spp is None else spp)
         width, height = size or self.scene.camera.size
-        check_target_size(ctx, width, height, s, self.screen_bytes_per_sample())
         view, proj = self.camera_matrices(width, height)
         view_proj = proj @ view
         vp_bytes = view_proj.T.astype(np.float32).tobytes()  # GLSL matrices are column-major
-        target = self._targets.get(ctx, width * s, height * s)
+        target = self._targets.get(
+            ctx, width * s, height * s, lambda: check_target_size(ctx, width, height, s, self.screen_bytes_per_sample())
+        )
         total = None
         for frame in range(first_frame, first_frame + n_frames):
             with self.timer.frame():

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..gpu import GLObjects, ProgramSpec, get_program
 from ..scene.environment import load_environment
-from ..scene.geometry import bounding_boxes, bounding_sphere, mesh_data
+from ..scene.geometry import bounding_boxes, mesh_data
 from ..scene.lightmask import load_masks, quad_uv
 from ..scene.meshdata import MeshData
 from ..scene.model import PolygonLight, QuadLight, Scene
@@ -53,9 +53,6 @@ class PreparedScene:
             self.environment_texture = self._own(tex)
         self.emitters = [self._emitter(i, light) for i, light in enumerate(scene.light) if _is_area(light)]
         points = [m.positions for m in self.meshes] + [light.polygon() for light in scene.light if _is_area(light)]
-        all_points = np.concatenate(points) if points else np.zeros((0, 3))
-        #: (centre, radius) of every mesh vertex and emitter corner, (None, 0) for an empty scene: the clip planes
-        self.bounds = bounding_sphere(all_points) if len(all_points) else (None, 0.0)
         #: (N, 2, 3) bounding boxes of each mesh and emitter: the camera's automatic near plane
         self.boxes = bounding_boxes(points)
         self._ibl = None

@@ -118,9 +118,10 @@ def total_reflectance(profile: str, medium: Medium) -> np.ndarray:
 def _total_reflectance(profile: str, sigma_a: tuple, sigma_s: tuple, g: float, eta: float) -> tuple:
     if profile == "normalized_diffusion":  # normalised by construction: ∫ = A, the better dipole's
         return _total_reflectance("better_dipole", sigma_a, sigma_s, g, eta)
-    if profile == "multiple_fit":  # normalised by construction: ∫ = A, the Monte Carlo's
+    if profile == "multiple_fit":  # normalised by construction: ∫ = A, the Monte Carlo's (no shape fit needed)
         medium = Medium(np.array(sigma_a), np.array(sigma_s), g, eta)
-        return tuple(float(a) for a in np.atleast_1d(multiple_fit_parameters(medium)["A"]))
+        albedos = np.atleast_1d(medium.albedo_prime)
+        return tuple(multiple_fit.energy(float(a), eta, better_dipole_reduced_total) for a in albedos)
     out = []
     for a, s in zip(sigma_a, sigma_s, strict=True):
         m = Medium(np.float64(a), np.float64(s), g, eta)
