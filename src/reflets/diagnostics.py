@@ -13,11 +13,10 @@ import warnings
 
 import numpy as np
 
+from .errors import RefletsWarning
 from .scene.model import PolygonLight, QuadLight, Scene
 
-
-class RefletsWarning(UserWarning):
-    """The scene renders, but part of it is ignored or unlit."""
+__all__ = ["RefletsWarning", "scene_warnings", "warn_scene"]
 
 
 #: what a whole-frame method other than a material's own technique draws of it (``Material.techniques``)

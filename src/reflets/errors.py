@@ -26,6 +26,10 @@ class RefletsError(Exception):
         return f"{where}: {self.message}" if where else self.message
 
 
+class RefletsWarning(UserWarning):
+    """The scene renders, but part of it is ignored, approximated or unlit (the CLI prints one line)."""
+
+
 class SceneError(RefletsError):
     """The scene (file or dict) is invalid: bad TOML, unknown key, wrong value, missing mesh file."""
 

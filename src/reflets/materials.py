@@ -14,6 +14,7 @@ from pydantic import Field
 from .brdf import (
     AshikhminShirley,
     BlinnPhong,
+    Gltf,
     Lafortune,
     Lambert,
     Measured,
@@ -34,6 +35,7 @@ MaterialSpec = Annotated[
     | Ward
     | AshikhminShirley
     | Microfacet
+    | Gltf
     | Measured
     | Translucent
     | Mirror

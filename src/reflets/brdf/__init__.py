@@ -8,6 +8,7 @@ from __future__ import annotations
 from .ashikhmin_shirley import AshikhminShirley
 from .base import MATERIALS, Material, register_material
 from .blinn_phong import BlinnPhong
+from .gltf import Gltf
 from .lafortune import Lafortune
 from .lambert import Lambert
 from .measured import Measured
@@ -27,6 +28,7 @@ __all__ = [
     "Ward",
     "AshikhminShirley",
     "Microfacet",
+    "Gltf",
     "Measured",
     "Mirror",
 ]

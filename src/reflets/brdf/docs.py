@@ -58,6 +58,7 @@ PROPERTIES = {
     "ward": ("yes", '"duer" variant with kd + ks ≤ 1; "original" exceeds 1 at grazing angles'),
     "ashikhmin_shirley": ("yes", "yes"),
     "microfacet": ("yes", "when diffuse + specular·max F ≤ 1 (single scattering loses energy)"),
+    "gltf": ("yes", "pure metals only: Appendix B's dielectric mix exceeds 1 at grazing views (up to 1.31)"),
     "measured": ("yes (φd folding)", "not guaranteed (measured noise, extrapolation near grazing)"),
     "translucent": ("yes", "yes (F_R + F_T·R_total ≤ 1; the far-field BRDF of the medium, see translucency.md)"),
     "mirror": ("yes", "diffuse + reflectance ≤ 1 (checked); the delta lobe is traced by fermat / the reference"),

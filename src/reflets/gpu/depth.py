@@ -42,6 +42,7 @@ _SIGNATURES = {
     "glGetIntegerv": (ctypes.c_uint, ctypes.POINTER(ctypes.c_int)),
     "glTexImage2D": (ctypes.c_uint, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_int,
                      ctypes.c_uint, ctypes.c_uint, ctypes.c_void_p),
+    "glTexParameteri": (ctypes.c_uint, ctypes.c_uint, ctypes.c_int),
 }  # fmt: skip
 
 
@@ -69,6 +70,21 @@ def float_depth_texture(ctx, size: tuple[int, int]):
     )
     _gl(ctx, "glBindTexture")(_GL_TEXTURE_2D, bound.value)
     return texture
+
+
+_GL_TEXTURE_WRAP = (0x2802, 0x2803)  # S, T
+GL_WRAP_MODES = {"repeat": 0x2901, "clamp": 0x812F, "mirror": 0x8370}
+
+
+def texture_wrap(ctx, texture, wrap: tuple[str, str]) -> None:
+    """Set a texture's wrap modes (s, t) among :data:`GL_WRAP_MODES` — moderngl's ``repeat_x`` / ``repeat_y`` know
+    repeat and clamp only, not glTF's mirrored repeat (through the same loader as the depth calls)."""
+    bound = ctypes.c_int(0)
+    _gl(ctx, "glGetIntegerv")(_GL_TEXTURE_BINDING_2D, ctypes.byref(bound))
+    _gl(ctx, "glBindTexture")(_GL_TEXTURE_2D, texture.glo)
+    for axis, mode in zip(_GL_TEXTURE_WRAP, wrap, strict=True):
+        _gl(ctx, "glTexParameteri")(_GL_TEXTURE_2D, axis, GL_WRAP_MODES[mode])
+    _gl(ctx, "glBindTexture")(_GL_TEXTURE_2D, bound.value)
 
 
 @contextlib.contextmanager

@@ -49,7 +49,7 @@ def _mesh_key(scene: Scene, index: int) -> tuple | None:
             except OSError:
                 return None  # let the build report the missing file
             files.append((str(scene.resolve(path)), stat.st_size, stat.st_mtime_ns))
-    orientation = getattr(scene.materials[mesh.material], "orientation", None)
+    orientation = getattr(scene.materials.get(mesh.material), "orientation", None)
     if orientation is not None:  # the material's field replaces the tangents
         try:
             stat = scene.resolve(orientation).stat()
@@ -65,7 +65,11 @@ def _build_mesh_data(scene: Scene, index: int) -> MeshData:
 
     mesh: MeshBase = scene.mesh[index]
     try:
-        if isinstance(mesh, FileMesh):
+        if isinstance(mesh, FileMesh) and mesh.part is not None:
+            from .assets import part_mesh
+
+            local = part_mesh(scene.resolve(mesh.file), mesh.part)
+        elif isinstance(mesh, FileMesh):
             local = load_mesh_file(scene.resolve(mesh.file))
         else:
             _check_segments(mesh, index)
@@ -117,6 +121,19 @@ def bounding_sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre = 0.5 * (lo + hi)
     return centre, float(np.sqrt(np.max(np.sum((points - centre) ** 2, axis=1))))
+
+
+def framing_camera(scene: Scene):
+    """A camera looking down −z at the scene's meshes, 45° vertical field of view, the bounding sphere filling the
+    view (what a glTF file without a camera is shown with)."""
+    from .model import Camera
+
+    points = np.concatenate([mesh_data(scene, i).positions for i in range(len(scene.mesh))]).astype(np.float64)
+    centre, radius = bounding_sphere(points)
+    fov = 45.0
+    distance = max(radius, 1e-6) / np.sin(np.radians(fov / 2)) * 1.05
+    return Camera(position=tuple(centre + [0.0, 0.0, distance]), look_at=tuple(centre), fov_y=fov,
+                  size=scene.camera.size)  # fmt: skip
 
 
 #: the automatic near plane: this fraction of the smallest object's bounding-box diagonal (reversed-Z depth keeps

@@ -15,9 +15,21 @@ from .lightmask import load_mask
 from .model import EnvironmentLight, FileMesh, HeightFieldMesh, Scene
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read and validate a TOML scene file; relative paths inside it are relative to its folder."""
+def load_scene(path: str | Path, camera: int | str | None = None, environment: str | Path | None = None) -> Scene:
+    """Read and validate a TOML scene file; relative paths inside it are relative to its folder.
+
+    A glTF file (.gltf, .glb) is a whole scene too (``reflets.scene.assets``): ``camera`` picks one of its
+    cameras (index or name; default the first, else one framing its bounding box), ``environment`` an HDR map
+    lighting it (default: its own lights, else the studio map shipped with reflets)."""
+    from .assets import is_asset
+
     path = Path(path)
+    if is_asset(path):
+        return scene_from_asset(path, camera=camera, environment=environment)
+    if camera is not None or environment is not None:
+        from ..errors import ArgumentError
+
+        raise ArgumentError("--camera and --environment apply to a glTF file, not to a scene file", file=path)
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -63,7 +75,99 @@ def load_dict(data: dict[str, Any], base_dir: str | Path | None = None, source: 
         scene = Scene.model_validate({**data, "base_dir": Path(base_dir) if base_dir else None})
     except ValidationError as exc:
         raise SceneError(_first_error(exc, data), file=source or "<scene>") from None
+    scene = _expand_file_meshes(scene, source)
     _check_files(scene, source)
+    return scene
+
+
+def _warn(lines) -> None:
+    import warnings
+
+    from ..errors import RefletsWarning
+
+    for line in lines:
+        warnings.warn(line, RefletsWarning, stacklevel=4)
+
+
+def _expand_file_meshes(scene: Scene, source) -> Scene:
+    """Each ``[[mesh]] file = "x.glb"`` without a material → one mesh per primitive instance with the file's
+    materials (named "<file stem>/<material>"; the scene's own materials of the same name win)."""
+    from .assets import is_asset, load_asset
+
+    if all(m.material is not None or not isinstance(m, FileMesh) for m in scene.mesh):
+        return scene
+    meshes, materials = [], dict(scene.materials)
+    for i, mesh in enumerate(scene.mesh):
+        if mesh.material is not None:
+            meshes.append(mesh)
+            continue
+        path = scene.resolve(mesh.file)
+        if not is_asset(path):
+            raise SceneError(f"mesh[{i}].material: required for a {path.suffix or 'extensionless'} file (only glTF "
+                             "files carry their own materials)", file=source)  # fmt: skip
+        try:
+            asset = load_asset(path)
+        except SceneError as exc:
+            raise SceneError(exc.message, file=exc.file, field=f"mesh[{i}].file") from None
+        _warn(asset.warnings)
+        for name, material in asset.materials.items():
+            materials.setdefault(name, material)
+        for part in asset.parts:
+            meshes.append(mesh.model_copy(update={**part, "name": mesh.name or part["name"], "file": path}))
+    data = {**scene.model_dump(exclude={"base_dir", "materials", "mesh"}, exclude_none=True), "mesh": meshes,
+            "materials": materials, "base_dir": scene.base_dir}  # fmt: skip
+    try:
+        return Scene.model_validate(data)
+    except ValidationError as exc:
+        raise SceneError(_first_error(exc, data), file=source or "<scene>") from None
+
+
+def scene_from_asset(path: str | Path, camera: int | str | None = None, environment: str | Path | None = None,
+                     ) -> Scene:  # fmt: skip
+    """A whole scene from a glTF file (see :func:`load_scene`)."""
+    from ..errors import ArgumentError
+    from .assets import default_environment, load_asset
+
+    path = Path(path)
+    if not path.exists():
+        raise SceneError("file not found", file=path)
+    asset = load_asset(path)
+    _warn(asset.warnings)
+    if not asset.parts:
+        raise SceneError("the default scene has no mesh to render", file=path)
+    lights: list[dict] = list(asset.lights)
+    if environment is not None or not lights:
+        env = Path(environment) if environment is not None else default_environment()
+        if not env.is_file():
+            raise ArgumentError(f"environment map not found: {env}", field="--environment")
+        lights.append({"type": "environment", "file": env.absolute()})
+    names = [c["name"] for c in asset.cameras]
+    if camera is None:
+        chosen = asset.cameras[0]["fields"] if asset.cameras else None
+    else:
+        index = names.index(camera) if camera in names else None
+        if index is None:
+            try:
+                index = int(camera)
+            except (TypeError, ValueError):
+                index = -1
+        if not 0 <= index < len(names):
+            listed = ", ".join(f"{k} ({n})" for k, n in enumerate(names)) or "none"
+            raise ArgumentError(f"no camera {camera!r} in {path.name}; its cameras: {listed}", field="--camera")
+        chosen = asset.cameras[index]["fields"]
+    data = {
+        "title": path.stem,
+        "materials": asset.materials,
+        "mesh": asset.parts,
+        "light": lights,
+        "background": "environment" if any(light["type"] == "environment" for light in lights) else None,
+        "camera": chosen if chosen is not None else {"position": (0.0, 0.0, 1.0), "look_at": (0.0, 0.0, 0.0)},
+    }
+    scene = load_dict({k: v for k, v in data.items() if v is not None}, base_dir=path.absolute().parent, source=path)
+    if chosen is None:
+        from .geometry import framing_camera
+
+        scene = scene.model_copy(update={"camera": framing_camera(scene)})
     return scene
 
 
@@ -73,6 +177,7 @@ def _check_files(scene: Scene, source) -> None:
     from .shapes import load_heights
 
     for name, material in scene.materials.items():
+        _check_textures(scene, name, material, source)
         if isinstance(material, Measured):
             material.file = scene.resolve(material.file)
             try:
@@ -103,6 +208,32 @@ def _check_files(scene: Scene, source) -> None:
                 file=source,
                 field=f"light[{i}].file",
             )
+
+
+def _check_textures(scene: Scene, name: str, material, source) -> None:
+    """Texture paths made absolute (materials resolve them without the scene) and present; images of a glTF file
+    must exist in it."""
+    from ..textures import TextureRef
+
+    for key in type(material).model_fields:
+        ref = getattr(material, key)
+        if not isinstance(ref, TextureRef):
+            continue
+        path = scene.resolve(ref.texture)
+        if not path.is_file():
+            raise SceneError(f"texture not found: {path}", file=source, field=f"materials.{name}.{key}")
+        if ref.image is not None:
+            from ..gltf_file import read_gltf
+
+            try:
+                count = len(read_gltf(path).doc.images or [])
+            except SceneError as exc:
+                raise SceneError(exc.message, file=exc.file, field=f"materials.{name}.{key}") from None
+            if ref.image >= count:
+                raise SceneError(f"image {ref.image} does not exist: {path.name} has {count} images", file=source,
+                                 field=f"materials.{name}.{key}.image")  # fmt: skip
+        if path != ref.texture:
+            setattr(material, key, ref.model_copy(update={"texture": path}))
 
 
 def did_you_mean(word: str, choices) -> str:

@@ -19,8 +19,15 @@ void main() {
     vec3 n = normalize(v_normal);
     if (!gl_FrontFacing) n = -n;
     mat3 frame = shading_frame(n, v_tangent);
+#ifdef MATERIAL_SURFACE
+    material_surface(v_uv, frame);  // textures into the parameters, the normal map into the frame
+    if (!material_covered()) discard;
+#endif
     vec3 wo = transpose(frame) * normalize(u_eye - v_position);
     vec3 sum = direct_lighting(v_position, frame, wo);
+#ifdef MATERIAL_SURFACE
+    sum += material_emission();
+#endif
 #if N_POLYGONS > 0
     for (int i = 0; i < N_POLYGONS; ++i) {
         vec3 light = area_light_contribution(i, v_position, frame, wo);

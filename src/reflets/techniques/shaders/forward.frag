@@ -15,6 +15,10 @@ void main() {
     vec3 n = normalize(v_normal);
     if (!gl_FrontFacing) n = -n;  // surfaces are two-sided: shade the side the camera sees
     mat3 frame = shading_frame(n, v_tangent);
+#ifdef MATERIAL_SURFACE
+    material_surface(v_uv, frame);  // textures into the parameters, the normal map into the frame
+    if (!material_covered()) discard;
+#endif
 #if OUTPUT == 1
     f_color = vec4(v_position, 1.0);
 #elif OUTPUT == 2
@@ -23,6 +27,10 @@ void main() {
     f_color = vec4(v_uv, 0.0, 1.0);
 #else
     vec3 wo = transpose(frame) * normalize(u_eye - v_position);
-    f_color = vec4(direct_lighting(v_position, frame, wo), 1.0);
+    vec3 radiance = direct_lighting(v_position, frame, wo);
+#ifdef MATERIAL_SURFACE
+    radiance += material_emission();
+#endif
+    f_color = vec4(radiance, 1.0);
 #endif
 }

@@ -21,21 +21,34 @@ uniform float u_ibl_alpha;             // its main lobe's GGX-equivalent roughne
 
 vec3 image_based_lighting(vec3 x, mat3 frame, vec3 wo) {
     vec3 n = frame[2], v = frame * wo;
-    vec3 diffuse = u_ibl_diffuse * INV_PI * texture(u_ibl_irradiance, equirect_uv(u_ibl_env_from_world * n)).rgb;
+#ifdef MATERIAL_IBL
+    // a material whose parameters vary over the surface (textures) gives its albedos per fragment
+    vec3 diffuse_albedo, albedo;
+    float alpha;
+    material_ibl(dot(n, v), diffuse_albedo, albedo, alpha);
+#else
+    vec3 diffuse_albedo = u_ibl_diffuse;
+    float alpha = u_ibl_alpha;
     float node = clamp(dot(n, v), 0.0, 1.0) * float(IBL_NODES) - 0.5;
     int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);
     vec3 albedo = mix(u_ibl_albedo[k0], u_ibl_albedo[k1], clamp(node - float(k0), 0.0, 1.0));
+#endif
+    vec3 diffuse = diffuse_albedo * INV_PI * texture(u_ibl_irradiance, equirect_uv(u_ibl_env_from_world * n)).rgb;
     // the lobe's dominant direction, between r and n as roughness grows (Lagarde & de Rousiers 2014): the
     // prefiltered lobe is centred on r (n = v = r), a rough BRDF lobe leans towards the normal
-    float smooth_ = 1.0 - u_ibl_alpha;
-    vec3 r = normalize(mix(n, reflect(-v, n), smooth_ * (sqrt(smooth_) + u_ibl_alpha)));
+    float smooth_ = 1.0 - alpha;
+    vec3 r = normalize(mix(n, reflect(-v, n), smooth_ * (sqrt(smooth_) + alpha)));
     vec3 seen_diffuse = vec3(1.0), seen_specular = vec3(1.0);
 #if ENV_VIEWS > 0 && SHADOW_VIEWS > 0
-    environment_visibility(x, n, r, u_ibl_alpha, seen_diffuse, seen_specular);  // the scene's occlusion
+    environment_visibility(x, n, r, alpha, seen_diffuse, seen_specular);  // the scene's occlusion
 #endif
-    float level = sqrt(u_ibl_alpha) * float(IBL_LEVELS - 1);
+    float level = sqrt(alpha) * float(IBL_LEVELS - 1);
     vec3 prefiltered = textureLod(u_ibl_radiance, equirect_uv(u_ibl_env_from_world * r), level).rgb;
-    return seen_diffuse * diffuse + seen_specular * albedo * prefiltered;
+    vec3 light = seen_diffuse * diffuse + seen_specular * albedo * prefiltered;
+#ifdef MATERIAL_SURFACE
+    light *= material_occlusion();  // the material's own ambient occlusion (glTF: the environment's light only)
+#endif
+    return light;
 }
 #endif
 

@@ -1,0 +1,120 @@
+// Provides brdf_eval(wo, wi) for glTF 2.0's metallic-roughness material (twin of reflets/brdf/gltf.py), and the
+// per-fragment hooks a textured material offers every shading pass (forward.frag, arealight.frag, lights.glsl):
+// material_surface(uv, frame) reads the textures into the parameters brdf_eval uses and applies the normal map;
+// material_emission(), material_occlusion(), material_coverage(), material_ibl(mu, ...).
+#define MATERIAL_SURFACE 1
+#define MATERIAL_IBL 1
+
+uniform vec4 m_base_color;           // linear RGBA factor
+uniform vec2 m_metallic_roughness;   // factors
+uniform float m_normal_scale;
+uniform float m_occlusion_strength;
+uniform vec3 m_emissive;             // factor x emissive_strength
+uniform float m_alpha_cutoff;
+// each texture with the mat3 taking mesh uv (v up) to image uv (origin top-left, KHR_texture_transform applied)
+#if BRDF_GLTF_BASE_MAP
+uniform sampler2D m_base_color_map;
+uniform mat3 m_base_color_map_uv;
+#endif
+#if BRDF_GLTF_MR_MAP
+uniform sampler2D m_metallic_roughness_map;
+uniform mat3 m_metallic_roughness_map_uv;
+#endif
+#if BRDF_GLTF_NORMAL_MAP
+uniform sampler2D m_normal_map;
+uniform mat3 m_normal_map_uv;
+#endif
+#if BRDF_GLTF_OCCLUSION_MAP
+uniform sampler2D m_occlusion_map;
+uniform mat3 m_occlusion_map_uv;
+#endif
+#if BRDF_GLTF_EMISSIVE_MAP
+uniform sampler2D m_emissive_map;
+uniform mat3 m_emissive_map_uv;
+#endif
+// the split sum's tables of this BRDF (reflets/brdf/gltf_ibl.py): (A, B, P) at (mu, roughness)
+uniform sampler2D m_ibl_lut;
+
+// the parameters at this fragment (material_surface sets them)
+vec3 g_base = vec3(1.0);
+float g_metallic = 1.0;
+float g_alpha = 1.0;
+float g_coverage = 1.0;
+float g_occlusion = 1.0;
+vec3 g_emission = vec3(0.0);
+
+vec4 gltf_texel(sampler2D map, mat3 to_image, vec2 uv) {
+    return texture(map, (to_image * vec3(uv, 1.0)).xy);
+}
+
+void material_surface(vec2 uv, inout mat3 frame) {
+    vec4 base = m_base_color;
+#if BRDF_GLTF_BASE_MAP
+    base *= gltf_texel(m_base_color_map, m_base_color_map_uv, uv);
+#endif
+    g_base = base.rgb;
+    g_coverage = base.a;
+    vec2 mr = m_metallic_roughness;
+#if BRDF_GLTF_MR_MAP
+    mr *= gltf_texel(m_metallic_roughness_map, m_metallic_roughness_map_uv, uv).bg;
+#endif
+    g_metallic = mr.x;
+    g_alpha = max(mr.y * mr.y, 1e-3);
+    g_occlusion = 1.0;
+#if BRDF_GLTF_OCCLUSION_MAP
+    g_occlusion = 1.0 + m_occlusion_strength * (gltf_texel(m_occlusion_map, m_occlusion_map_uv, uv).r - 1.0);
+#endif
+    g_emission = m_emissive;
+#if BRDF_GLTF_EMISSIVE_MAP
+    g_emission *= gltf_texel(m_emissive_map, m_emissive_map_uv, uv).rgb;
+#endif
+#if BRDF_GLTF_NORMAL_MAP
+    vec3 local = gltf_texel(m_normal_map, m_normal_map_uv, uv).xyz * 2.0 - 1.0;
+    local.xy *= m_normal_scale;
+    float handedness = dot(cross(frame[2], frame[0]), frame[1]) < 0.0 ? -1.0 : 1.0;
+    frame = shading_frame(normalize(frame * local), vec4(frame[0], handedness));
+#endif
+}
+
+vec3 material_emission() { return g_emission; }
+float material_occlusion() { return g_occlusion; }
+// false where alpha_mode = "mask" cuts the surface away
+bool material_covered() {
+#if BRDF_GLTF_MASK
+    return g_coverage >= m_alpha_cutoff;
+#else
+    return true;
+#endif
+}
+
+// The environment's split sum for this BRDF: its specular directional albedo F0 A + B (Schlick: F0 mixes 0.04 and
+// the base colour by metallic) and the dielectric's diffuse albedo (1 - m) c 0.96 (1 - P), P = the mean of
+// (1 - v.h)^5 over the cosine-weighted hemisphere, both from the table at mu = n.v and the roughness.
+void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, out float alpha) {
+    vec3 abp = texture(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), sqrt(g_alpha))).rgb;
+    vec3 f0 = mix(vec3(0.04), g_base, g_metallic);
+    specular_albedo = f0 * abp.x + abp.y;
+    diffuse_albedo = (1.0 - g_metallic) * g_base * 0.96 * (1.0 - abp.z);
+    alpha = g_alpha;
+}
+
+// GGX D(h) and the Smith Lambda(w), isotropic
+float gltf_d(vec3 h, float a) {
+    if (h.z <= 0.0) return 0.0;
+    float q = dot(h.xy, h.xy) / (a * a) + h.z * h.z;
+    return 1.0 / (PI * a * a * q * q);
+}
+float gltf_lambda(vec3 w, float a) {
+    float a2t2 = a * a * dot(w.xy, w.xy) / max(w.z * w.z, 1e-30);
+    return a2t2 / (2.0 * (1.0 + sqrt(1.0 + a2t2)));
+}
+
+vec3 brdf_eval(vec3 wo, vec3 wi) {
+    if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
+    vec3 h = normalize(wo + wi);
+    float schlick = pow(1.0 - clamp(dot(wo, h), 0.0, 1.0), 5.0);
+    float dv = gltf_d(h, g_alpha) / ((1.0 + gltf_lambda(wo, g_alpha) + gltf_lambda(wi, g_alpha)) * 4.0 * wo.z * wi.z);
+    float f_d = 0.04 + 0.96 * schlick;
+    vec3 f_m = g_base + (1.0 - g_base) * schlick;
+    return (1.0 - g_metallic) * ((1.0 - f_d) * g_base * INV_PI + f_d * dv) + g_metallic * f_m * dv;
+}

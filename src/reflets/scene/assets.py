@@ -1,0 +1,308 @@
+"""Real assets as scenes: a glTF file's parts, materials, cameras and lights in reflets' scene model.
+
+``load_scene("model.glb")`` (and every command taking a scene) builds a whole scene from the file; a scene TOML's
+``[[mesh]] file = "model.glb"`` without ``material`` becomes one mesh per primitive instance with the file's
+materials (``expand_file_meshes``), its ``transform`` applied on top of the file's node transforms.
+
+What becomes what (docs/assets.md has the full table):
+
+- each primitive of each mesh node of the default scene → a ``FileMesh`` with ``part`` = its index in
+  :meth:`GltfFile.instances` order, named after the node; the file's world transform is baked into the part's
+  vertices (reflets' meshes are stored in world space), the parsed file and its accessors are shared;
+- materials → ``type = "gltf"`` (Appendix B) with their textures (``TextureRef``: the glTF file and the image
+  index, the sampler's wrap modes and filter, ``KHR_texture_transform``), ``KHR_materials_emissive_strength``;
+  any other material extension → a warning naming it (its base material is rendered);
+- cameras → ``Camera`` (perspective; ``--camera K`` picks one; default the first, else one framing the bounding
+  box); orthographic cameras are skipped with a warning (reflets' camera is a pinhole);
+- ``KHR_lights_punctual`` → point / directional lights, photometric units converted to radiometric ones at
+  683 lm/W (the luminous efficacy of 555 nm light, as Blender's glTF importer does): W/sr = cd / 683,
+  W/m² = lx / 683; spot lights → point lights without their cone (warned); ``range`` is ignored (the
+  specification allows it);
+- no light in the file → the environment map given, or the studio map shipped with reflets
+  (``data/environments/studio.hdr``, Poly Haven's brown_photostudio_02), shown as the background.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError
+from ..gltf_file import GltfFile, read_gltf
+from .meshdata import MeshData
+
+#: the file extensions that carry materials (and so may stand without ``material`` in a scene)
+ASSET_EXTENSIONS = (".gltf", ".glb")
+#: lumens per watt of 555 nm light: photometric glTF light units → reflets' radiometric ones
+LUMINOUS_EFFICACY = 683.0
+#: material extensions read into the ``gltf`` material
+SUPPORTED_MATERIAL_EXTENSIONS = {"KHR_materials_emissive_strength", "KHR_texture_transform"}
+WRAPS = {10497: "repeat", 33071: "clamp", 33648: "mirror"}
+NEAREST_FILTERS = {9728, 9984, 9986}  # NEAREST, NEAREST_MIPMAP_NEAREST, NEAREST_MIPMAP_LINEAR (mag / min)
+
+
+def default_environment() -> Path:
+    """The studio map lighting a file that has no light of its own."""
+    return Path(str(resources.files("reflets").joinpath("data", "environments", "studio.hdr")))
+
+
+@dataclass
+class Asset:
+    """What a file holds, in scene-model terms (dicts ready for validation), and what was left out."""
+
+    path: Path
+    parts: list[dict]  # FileMesh dicts (file, part, name, material)
+    materials: dict[str, dict]
+    cameras: list[dict]  # Camera dicts without size / the framing default
+    lights: list[dict]
+    warnings: list[str] = field(default_factory=list)
+
+
+def is_asset(path: str | Path) -> bool:
+    return Path(path).suffix.lower() in ASSET_EXTENSIONS
+
+
+def load_asset(path: str | Path) -> Asset:
+    """Read a glTF file's parts, materials, cameras and lights (see the module docstring)."""
+    path = Path(path).absolute()
+    gltf = read_gltf(path)
+    warnings: list[str] = []
+    names = _material_names(gltf)
+    materials = {names[i]: _material(gltf, i, warnings) for i in range(len(gltf.doc.materials or []))}
+    parts = []
+    default_material = None
+    for index, instance in enumerate(gltf.instances()):
+        material = gltf.doc.meshes[instance.mesh].primitives[instance.primitive].material
+        if material is None:
+            default_material = default_material or _unique("default", names)
+            materials.setdefault(default_material, {"type": "gltf"})  # the specification's default material
+            name = default_material
+        elif not 0 <= material < len(names):
+            raise SceneError(f"meshes[{instance.mesh}].primitives[{instance.primitive}].material: materials"
+                             f"[{material}] does not exist", file=path)  # fmt: skip
+        else:
+            name = names[material]
+        parts.append({"file": path, "part": index, "name": instance.name, "material": name})
+    cameras, lights = _cameras(gltf, warnings), _lights(gltf, warnings)
+    warnings += gltf.warnings
+    return Asset(path, parts, materials, cameras, lights, _dedupe(warnings))
+
+
+def _dedupe(lines: list[str]) -> list[str]:
+    return list(dict.fromkeys(lines))
+
+
+def _unique(name: str, taken) -> str:
+    candidate, k = name, 1
+    while candidate in taken:
+        k += 1
+        candidate = f"{name} ({k})"
+    return candidate
+
+
+def _material_names(gltf: GltfFile) -> list[str]:
+    """Unique names of the file's materials: their own, else ``material K``, prefixed with the file's stem."""
+    out: list[str] = []
+    for i, material in enumerate(gltf.doc.materials or []):
+        out.append(_unique(f"{gltf.path.stem}/{material.name or f'material {i}'}", out))
+    return out
+
+
+def _texture(gltf: GltfFile, info, where: str, warnings: list[str]) -> dict | None:
+    """A TextureRef dict for a glTF textureInfo (None when absent)."""
+    if info is None:
+        return None
+    textures = gltf.doc.textures or []
+    index = info.index
+    if index is None or not 0 <= index < len(textures):
+        raise SceneError(f"{where}.index: textures[{index}] does not exist", file=gltf.path)
+    texture = textures[index]
+    source = texture.source
+    if source is None:  # e.g. only an extension's image (KHR_texture_basisu, EXT_texture_webp)
+        found = [key for key in (texture.extensions or {})]
+        warnings.append(f"{gltf.path.name}: textures[{index}] has no PNG / JPEG source ({', '.join(found) or 'none'}"
+                        f"): {where} left out")  # fmt: skip
+        return None
+    ref: dict = {"texture": gltf.path, "image": source, "uv": info.texCoord or 0}
+    image = (gltf.doc.images or [])[source] if source < len(gltf.doc.images or []) else None
+    if image is not None and image.uri and not image.uri.startswith("data:"):
+        import urllib.parse
+
+        ref = {"texture": gltf.path.parent / urllib.parse.unquote(image.uri), "uv": info.texCoord or 0}
+    transform = (info.extensions or {}).get("KHR_texture_transform")
+    if transform is not None:
+        ref["transform"] = {
+            "offset": tuple(transform.get("offset", (0.0, 0.0))),
+            "rotation": float(transform.get("rotation", 0.0)),
+            "scale": tuple(transform.get("scale", (1.0, 1.0))),
+        }
+        if "texCoord" in transform:
+            ref["uv"] = int(transform["texCoord"])
+    if texture.sampler is not None and 0 <= texture.sampler < len(gltf.doc.samplers or []):
+        sampler = gltf.doc.samplers[texture.sampler]
+        ref["wrap"] = (WRAPS.get(sampler.wrapS or 10497, "repeat"), WRAPS.get(sampler.wrapT or 10497, "repeat"))
+        if sampler.magFilter in NEAREST_FILTERS:
+            ref["filter"] = "nearest"
+    if ref["uv"] != 0:
+        warnings.append(f"{gltf.path.name}: {where} reads TEXCOORD_{ref['uv']}; reflets meshes carry one uv set, "
+                        "TEXCOORD_0 is used")  # fmt: skip
+        ref["uv"] = 0
+    return ref
+
+
+def _material(gltf: GltfFile, index: int, warnings: list[str]) -> dict:
+    m = gltf.doc.materials[index]
+    where = f"materials[{index}]"
+    pbr = m.pbrMetallicRoughness
+    out: dict = {"type": "gltf", "double_sided": bool(m.doubleSided)}
+    if pbr is not None:
+        if pbr.baseColorFactor is not None:
+            out["base_color"] = tuple(float(np.clip(c, 0.0, 1.0)) for c in pbr.baseColorFactor)
+        out["metallic"] = float(np.clip(1.0 if pbr.metallicFactor is None else pbr.metallicFactor, 0.0, 1.0))
+        out["roughness"] = float(np.clip(1.0 if pbr.roughnessFactor is None else pbr.roughnessFactor, 0.0, 1.0))
+        slot = where + ".pbrMetallicRoughness."
+        out["base_color_texture"] = _texture(gltf, pbr.baseColorTexture, slot + "baseColorTexture", warnings)
+        mr = _texture(gltf, pbr.metallicRoughnessTexture, slot + "metallicRoughnessTexture", warnings)
+        out["metallic_roughness_texture"] = mr
+    if m.normalTexture is not None:
+        out["normal_texture"] = _texture(gltf, m.normalTexture, where + ".normalTexture", warnings)
+        out["normal_scale"] = float(m.normalTexture.scale if m.normalTexture.scale is not None else 1.0)
+    if m.occlusionTexture is not None:
+        out["occlusion_texture"] = _texture(gltf, m.occlusionTexture, where + ".occlusionTexture", warnings)
+        strength = m.occlusionTexture.strength
+        out["occlusion_strength"] = float(np.clip(1.0 if strength is None else strength, 0.0, 1.0))
+    if m.emissiveFactor is not None:
+        out["emissive"] = tuple(float(max(c, 0.0)) for c in m.emissiveFactor)
+    out["emissive_texture"] = _texture(gltf, m.emissiveTexture, where + ".emissiveTexture", warnings)
+    extensions = m.extensions or {}
+    if "KHR_materials_emissive_strength" in extensions:
+        out["emissive_strength"] = float(extensions["KHR_materials_emissive_strength"].get("emissiveStrength", 1.0))
+    mode = (m.alphaMode or "OPAQUE").lower()
+    out["alpha_mode"] = mode if mode in ("opaque", "mask", "blend") else "opaque"
+    if m.alphaCutoff is not None:
+        out["alpha_cutoff"] = float(np.clip(m.alphaCutoff, 0.0, 1.0))
+    name = m.name or where
+    if mode == "blend":
+        warnings.append(f"{gltf.path.name}: material '{name}': alphaMode BLEND rendered opaque (no blending yet)")
+    if mode == "mask":
+        warnings.append(f"{gltf.path.name}: material '{name}': alphaMode MASK cuts the surface from the camera "
+                        "only (its shadows and the references keep the whole surface)")  # fmt: skip
+    for extension in sorted(set(extensions) - SUPPORTED_MATERIAL_EXTENSIONS):
+        warnings.append(f"{gltf.path.name}: material '{name}': {extension} not supported, its base "
+                        "metallic-roughness material is rendered")  # fmt: skip
+    return {key: value for key, value in out.items() if value is not None}
+
+
+def _basis(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(position, −z, +y) of a node's world matrix (cameras and lights look along their −z)."""
+    position = matrix[:3, 3]
+    forward = -matrix[:3, 2] / max(np.linalg.norm(matrix[:3, 2]), 1e-30)
+    up = matrix[:3, 1] / max(np.linalg.norm(matrix[:3, 1]), 1e-30)
+    return position, forward, up
+
+
+def _cameras(gltf: GltfFile, warnings: list[str]) -> list[dict]:
+    out = []
+    cameras = gltf.doc.cameras or []
+    for node_index, matrix in gltf.world_matrices().items():
+        node = gltf.doc.nodes[node_index]
+        if node.camera is None:
+            continue
+        if not 0 <= node.camera < len(cameras):
+            raise SceneError(f"nodes[{node_index}].camera: cameras[{node.camera}] does not exist", file=gltf.path)
+        camera = cameras[node.camera]
+        name = camera.name or node.name or f"camera {node.camera}"
+        if camera.type != "perspective" or camera.perspective is None:
+            warnings.append(f"{gltf.path.name}: camera '{name}' is {camera.type}: skipped (reflets' camera is a "
+                            "pinhole)")  # fmt: skip
+            continue
+        position, forward, up = _basis(matrix)
+        p = camera.perspective
+        fields = {
+            "position": tuple(map(float, position)),
+            "look_at": tuple(map(float, position + forward)),
+            "up": tuple(map(float, up)),
+            "fov_y": float(np.clip(math.degrees(p.yfov), 1e-3, 179.0)),
+            "near": float(p.znear) if p.znear else None,
+            "far": float(p.zfar) if p.zfar else None,
+        }
+        if p.aspectRatio:
+            fields["size"] = (max(1, round(480 * float(p.aspectRatio))), 480)
+        out.append({"name": name, "fields": {k: v for k, v in fields.items() if v is not None}})
+    return out
+
+
+def _lights(gltf: GltfFile, warnings: list[str]) -> list[dict]:
+    defined = ((gltf.doc.extensions or {}).get("KHR_lights_punctual") or {}).get("lights") or []
+    out = []
+    for node_index, matrix in gltf.world_matrices().items():
+        ref = ((gltf.doc.nodes[node_index].extensions or {}).get("KHR_lights_punctual") or {}).get("light")
+        if ref is None:
+            continue
+        if not isinstance(ref, int) or not 0 <= ref < len(defined):
+            raise SceneError(f"nodes[{node_index}].extensions.KHR_lights_punctual.light: no light {ref!r}",
+                             file=gltf.path)  # fmt: skip
+        light = defined[ref]
+        color = np.asarray(light.get("color", (1.0, 1.0, 1.0)), dtype=np.float64)
+        power = tuple(float(c) for c in np.maximum(color * float(light.get("intensity", 1.0)), 0.0) / LUMINOUS_EFFICACY)
+        position, forward, _ = _basis(matrix)
+        kind = light.get("type")
+        name = light.get("name") or f"light {ref}"
+        if kind == "directional":
+            out.append({"type": "directional", "direction": tuple(map(float, forward)), "irradiance": power})
+            continue
+        if kind == "spot":
+            warnings.append(f"{gltf.path.name}: spot light '{name}' rendered as a point light (no cone yet)")
+        elif kind != "point":
+            warnings.append(f"{gltf.path.name}: light '{name}' of type {kind!r} skipped")
+            continue
+        out.append({"type": "point", "position": tuple(map(float, position)), "intensity": power})
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- geometry
+
+
+def part_mesh(path: str | Path, part: int) -> MeshData:
+    """One primitive instance of a glTF file in the file's world coordinates, with a full shading frame: the
+    file's normals (flat normals when it has none, as the specification requires), its tangents (else built from
+    the uv layout: ``compute_tangents``), its TEXCOORD_0 (v flipped to reflets' v up)."""
+    from .meshfile import _unit, compute_tangents, spherical_uv
+
+    gltf = read_gltf(path)
+    instances = gltf.instances()
+    if not 0 <= part < len(instances):
+        raise SceneError(f"part {part} does not exist: the file has {len(instances)} primitive instances", file=path)
+    instance = instances[part]
+    prim = gltf.primitive(instance.mesh, instance.primitive)
+    where = f"meshes[{instance.mesh}].primitives[{instance.primitive}]"
+    if prim is None or len(prim.indices) == 0:
+        raise SceneError(f"{where}: no triangles", file=path)
+    pos, faces = prim.positions, prim.indices
+    normals, tangents, uv = prim.normals, prim.tangents, prim.uvs[0]
+    if normals is None:  # flat: every triangle its own three vertices
+        corners = faces.ravel()
+        pos, faces = pos[corners], np.arange(len(corners)).reshape(-1, 3)
+        uv = uv[corners] if uv is not None else None
+        tangents = None
+        face = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
+        normals = np.repeat(_unit(face)[0], 3, axis=0)
+    if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(normals))):
+        raise SceneError(f"{where}: non-finite vertex data", file=path)
+    mesh_uv = np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=1) if uv is not None else spherical_uv(pos)
+    normals, length = _unit(normals)
+    normals[length == 0] = (0.0, 1.0, 0.0)
+    if tangents is None or not np.all(np.isfinite(tangents)):
+        tangents = compute_tangents(pos, normals, mesh_uv, faces)
+    local = MeshData(
+        positions=pos.astype(np.float32),
+        normals=normals.astype(np.float32),
+        tangents=np.asarray(tangents, dtype=np.float32),
+        uvs=mesh_uv.astype(np.float32),
+        indices=faces.astype(np.uint32),
+    )
+    return local.transformed(instance.matrix)

@@ -1,0 +1,277 @@
+"""Textures of materials: the scene-file reference, decoding by role, mip chains, GPU upload, NumPy lookups.
+
+A material parameter read from an image (a glTF texture, an MTL map, ``{ texture = "wood.png" }`` in a scene)
+is a :class:`TextureRef`. What the pixels mean decides how they are decoded, not the file: colour (base colour,
+emission) is sRGB-encoded and linearised, data (metallic-roughness, normals, occlusion) is used as stored.
+
+Both renderers read the same decoded texels:
+
+- the GPU gets an 8-bit texture (``SRGB8_ALPHA8`` for colour, so the sampler linearises before filtering;
+  ``RGBA8`` for data) with a full mip chain built here in linear float (a box filter; the driver's own mipmap
+  generation is not guaranteed gamma-correct for sRGB formats), trilinear and 16× anisotropic filtering, and
+  the wrap modes of the file's sampler; one texture per content and role, shared by every object and renderer
+  of a GL context (``texture_for``);
+- the NumPy reference samples level 0 bilinearly with the same wrap modes (``TextureData.sample``): a
+  supersampled reference pixel averages such lookups over the pixel's footprint, which is what the GPU's mip
+  filtering approximates.
+
+uv convention: a mesh's uv has v up (OpenGL, OBJ); image row 0 is the top. A lookup at mesh uv ``(u, v)`` reads
+the image at ``(u, 1 − v)`` from its top-left corner — glTF's uv, where KHR_texture_transform applies.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import math
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from .errors import SceneError
+
+Wrap = Literal["repeat", "clamp", "mirror"]
+FiniteFloat = Annotated[float, Field(allow_inf_nan=False, ge=-1e6, le=1e6)]
+
+
+class TextureTransform(BaseModel):
+    """KHR_texture_transform: uv' = T(offset) · R(rotation) · S(scale) · uv, in the image's uv (origin top-left,
+    v down); ``rotation`` in radians, counter-clockwise in that space as the extension defines it."""
+
+    model_config = ConfigDict(extra="forbid")
+    offset: tuple[FiniteFloat, FiniteFloat] = (0.0, 0.0)
+    rotation: FiniteFloat = 0.0
+    scale: tuple[FiniteFloat, FiniteFloat] = (1.0, 1.0)
+
+    def matrix(self) -> np.ndarray:
+        """3×3 matrix acting on (u, v, 1) in image uv (the extension's own formula)."""
+        c, s = math.cos(self.rotation), math.sin(self.rotation)
+        translation = np.array([[1, 0, self.offset[0]], [0, 1, self.offset[1]], [0, 0, 1]], float)
+        rotation = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]], float)
+        scale = np.diag([self.scale[0], self.scale[1], 1.0])
+        return translation @ rotation @ scale
+
+
+class TextureRef(BaseModel):
+    """An image read by a material parameter.
+
+    ``texture``: an image file (PNG, JPEG…; relative to the scene file), or a glTF file with ``image`` = the index
+    of one of its images (embedded or not); ``uv``: the uv set; ``srgb``: how colour is encoded (None: by the
+    parameter's role — colour sRGB, data linear); ``transform``: KHR_texture_transform; ``wrap``: (s, t) wrap
+    modes; ``filter``: "linear" (trilinear mips, anisotropic) or "nearest"."""
+
+    model_config = ConfigDict(extra="forbid")
+    texture: Path
+    image: int | None = Field(None, ge=0, description="the image index inside a glTF file")
+    uv: int = Field(0, ge=0, le=1, description="the uv set (TEXCOORD_n)")
+    srgb: bool | None = Field(None, description="sRGB-encoded colour (None: by the parameter's role)")
+    transform: TextureTransform | None = None
+    wrap: tuple[Wrap, Wrap] = ("repeat", "repeat")
+    filter: Literal["linear", "nearest"] = "linear"
+
+    def uv_matrix(self) -> np.ndarray:
+        """3×3 matrix from mesh uv (v up) to image uv (v down, transform applied)."""
+        flip = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 1.0], [0.0, 0.0, 1.0]])
+        return (self.transform.matrix() if self.transform is not None else np.eye(3)) @ flip
+
+
+#: the decoded images kept in memory (their float copies are large: 2048² RGBA = 64 MB), least recently used out
+TEXTURE_CACHE_ENTRIES = 16
+_DECODED: OrderedDict[str, TextureData] = OrderedDict()
+_LOCK = threading.Lock()
+
+
+def srgb_to_linear(c: np.ndarray) -> np.ndarray:
+    """IEC 61966-2-1 decoding, exact (the same curve the GPU's sRGB formats apply)."""
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def linear_to_srgb(c: np.ndarray) -> np.ndarray:
+    c = np.clip(c, 0.0, 1.0)
+    return np.where(c <= 0.0031308, c * 12.92, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
+
+
+@dataclass
+class TextureData:
+    """A decoded texture: ``codes`` (H, W, 4) uint8 as stored (row 0 = top), ``srgb`` whether colour is
+    sRGB-encoded, ``key`` its content hash; ``texels`` the linear float32 values both renderers read."""
+
+    codes: np.ndarray
+    srgb: bool
+    key: str
+    wrap: tuple[str, str] = ("repeat", "repeat")
+    nearest: bool = False
+
+    def __post_init__(self):
+        values = self.codes.astype(np.float32) / 255.0
+        if self.srgb:
+            values[..., :3] = srgb_to_linear(values[..., :3])
+        self.texels = values
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.codes.shape[1], self.codes.shape[0]
+
+    def sample(self, uv: np.ndarray) -> np.ndarray:
+        """Bilinear (or nearest) lookups at image uv (N, 2) (origin top-left), with the wrap modes: (N, 4)."""
+        h, w = self.codes.shape[:2]
+        x = np.asarray(uv[:, 0], np.float64) * w - 0.5
+        y = np.asarray(uv[:, 1], np.float64) * h - 0.5
+        if self.nearest:
+            xi = _wrap(np.floor(x + 0.5).astype(np.int64), w, self.wrap[0])
+            yi = _wrap(np.floor(y + 0.5).astype(np.int64), h, self.wrap[1])
+            return self.texels[yi, xi].astype(np.float64)
+        x0, y0 = np.floor(x), np.floor(y)
+        fx, fy = (x - x0)[:, None], (y - y0)[:, None]
+        x0, y0 = x0.astype(np.int64), y0.astype(np.int64)
+        xa, xb = _wrap(x0, w, self.wrap[0]), _wrap(x0 + 1, w, self.wrap[0])
+        ya, yb = _wrap(y0, h, self.wrap[1]), _wrap(y0 + 1, h, self.wrap[1])
+        t = self.texels
+        top = t[ya, xa] * (1 - fx) + t[ya, xb] * fx
+        bottom = t[yb, xa] * (1 - fx) + t[yb, xb] * fx
+        return (top * (1 - fy) + bottom * fy).astype(np.float64)
+
+    def mip_chain(self) -> list[np.ndarray]:
+        """uint8 (h, w, 4) levels down to 1×1, each the 2×2 box mean of the one above in linear values (an odd
+        side keeps its last row / column once), re-encoded like level 0."""
+        levels = [self.codes]
+        linear = self.texels.astype(np.float64)
+        while linear.shape[0] > 1 or linear.shape[1] > 1:
+            linear = _halve(linear)
+            encoded = linear.copy()
+            if self.srgb:
+                encoded[..., :3] = linear_to_srgb(encoded[..., :3])
+            levels.append(np.clip(np.rint(encoded * 255.0), 0, 255).astype(np.uint8))
+        return levels
+
+    @property
+    def gpu_bytes(self) -> int:
+        """Bytes of the GPU texture with its mips (4 bytes a texel, 4/3 for the chain)."""
+        return int(self.codes.shape[0] * self.codes.shape[1] * 4 * 4 / 3)
+
+
+def _wrap(i: np.ndarray, n: int, mode: str) -> np.ndarray:
+    if mode == "clamp":
+        return np.clip(i, 0, n - 1)
+    if mode == "mirror":
+        period = np.mod(i, 2 * n)
+        return np.where(period < n, period, 2 * n - 1 - period)
+    return np.mod(i, n)
+
+
+def _halve(a: np.ndarray) -> np.ndarray:
+    h, w = a.shape[:2]
+    if h > 1:
+        a = a[: h - h % 2 : 2] * 0.5 + a[1 : h - h % 2 + 1 : 2] * 0.5 if h % 2 == 0 else _halve_odd(a, 0)
+    if w > 1:
+        a = a[:, 0 : w - w % 2 : 2] * 0.5 + a[:, 1 : w - w % 2 + 1 : 2] * 0.5 if w % 2 == 0 else _halve_odd(a, 1)
+    return a
+
+
+def _halve_odd(a: np.ndarray, axis: int) -> np.ndarray:
+    """An odd side: pairs averaged, the last row / column folded into the last pair (weights ⅓ each)."""
+    n = a.shape[axis]
+    a = np.moveaxis(a, axis, 0)
+    out = a[0 : n - 1 : 2] * 0.5 + a[1:n:2] * 0.5
+    out[-1] = (a[n - 3] + a[n - 2] + a[n - 1]) / 3.0
+    return np.moveaxis(out, 0, axis)
+
+
+#: how many pixels an image may have (Pillow's own bomb limit is 89 M; a material map is rarely over 8192²)
+MAX_TEXTURE_PIXELS = 8192 * 8192
+
+
+def decode_image_bytes(data: bytes, what: str) -> np.ndarray:
+    """(H, W, 4) uint8 RGBA of an image file's bytes (grey, grey + alpha, palette, RGB and RGBA widened; 16-bit
+    channels rounded to 8), or a SceneError naming ``what``."""
+    from PIL import Image
+
+    try:
+        with Image.open(io.BytesIO(data)) as image:
+            if image.width * image.height > MAX_TEXTURE_PIXELS:
+                raise SceneError(f"{what}: {image.width}x{image.height} texture, over {MAX_TEXTURE_PIXELS:,} pixels")
+            if image.mode in ("I;16", "I;16B", "I", "F"):
+                grey = np.asarray(image, dtype=np.float64)
+                scale = 65535.0 if grey.max() > 255 else 255.0
+                codes = np.clip(np.rint(grey / scale * 255.0), 0, 255).astype(np.uint8)
+                return np.dstack([codes, codes, codes, np.full_like(codes, 255)])
+            return np.asarray(image.convert("RGBA"), dtype=np.uint8).copy()
+    except SceneError:
+        raise
+    except Exception as exc:  # Pillow raises many types for damaged or unknown data
+        raise SceneError(f"{what}: cannot decode the image ({type(exc).__name__}: {exc})") from None
+
+
+def texture_data(codes_source, key_source: bytes, srgb: bool, wrap=("repeat", "repeat"), nearest=False) -> TextureData:
+    """The decoded texture of some image bytes (``codes_source()`` decodes them), cached by content and role."""
+    key = hashlib.sha1(key_source + repr((srgb, tuple(wrap), nearest)).encode()).hexdigest()
+    with _LOCK:
+        if key in _DECODED:
+            _DECODED.move_to_end(key)
+            return _DECODED[key]
+    data = TextureData(codes_source(), srgb, key, tuple(wrap), nearest)
+    data.codes.flags.writeable = False
+    data.texels.flags.writeable = False
+    with _LOCK:
+        _DECODED[key] = data
+        while len(_DECODED) > TEXTURE_CACHE_ENTRIES:
+            _DECODED.popitem(last=False)
+    return data
+
+
+def load_texture(ref: TextureRef, resolve, role_srgb: bool, field: str) -> TextureData:
+    """The texels of ``ref`` (``resolve`` makes its path absolute: the scene's), decoded for its role."""
+    path = resolve(ref.texture)
+    srgb = role_srgb if ref.srgb is None else ref.srgb
+    if ref.image is not None:
+        from .gltf_file import read_gltf  # an image inside a glTF file
+
+        data = read_gltf(path).image_bytes(ref.image)
+        what = f"{path}: images[{ref.image}]"
+    else:
+        try:
+            data = Path(path).read_bytes()
+        except OSError as exc:
+            raise SceneError(
+                f"{field}: cannot read the texture ({exc.strerror or type(exc).__name__})", file=path
+            ) from None
+        what = str(path)
+    return texture_data(lambda: decode_image_bytes(data, what), data, srgb, ref.wrap, ref.filter == "nearest")
+
+
+SRGB8_ALPHA8 = 0x8C43
+RGBA8 = 0x8058
+
+
+def texture_for(ctx, data: TextureData):
+    """The GL texture of ``data`` in ``ctx`` (uploaded once per context; its memory checked first)."""
+    import moderngl
+
+    from .gpu import depth
+    from .gpu.context import context_store
+    from .resources import check
+
+    store = context_store(ctx, "material_textures")
+    texture = store.get(data.key)
+    if texture is not None:
+        return texture
+    check("texture", data.gpu_bytes, value=f"{data.size[0]}x{data.size[1]}", what="RGBA8 texels and their mips")
+    levels = data.mip_chain()
+    w, h = data.size
+    texture = ctx.texture((w, h), 4, levels[0].tobytes(), internal_format=SRGB8_ALPHA8 if data.srgb else RGBA8)
+    texture.build_mipmaps(0, len(levels) - 1)  # allocates the chain; the levels are written next
+    for level, codes in enumerate(levels[1:], start=1):
+        texture.write(codes.tobytes(), level=level)
+    if data.nearest:
+        texture.filter = (moderngl.NEAREST_MIPMAP_NEAREST, moderngl.NEAREST)
+    else:
+        texture.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+        texture.anisotropy = 16.0
+    depth.texture_wrap(ctx, texture, data.wrap)
+    store[data.key] = texture
+    return texture
