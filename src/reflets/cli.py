@@ -68,15 +68,26 @@ def _check_render_memory(out: Path, size: tuple[int, int]) -> None:
     )
 
 
+def _scene_argument(args):
+    """The scene of a command: a TOML file, or a glTF file with its --camera / --environment choices."""
+    from .scene import load_scene
+
+    return load_scene(args.scene, camera=args.camera, environment=args.environment)
+
+
+def _asset_options(p) -> None:
+    p.add_argument("--camera", help="a glTF file's camera (index or name; default its first, else one framing it)")
+    p.add_argument("--environment", help="an HDR map lighting a glTF file (default: its lights, else a studio map)")
+
+
 def cmd_render(args) -> int:
     from .api import render
-    from .arguments import as_scene
     from .imageio import IMAGE_WRITE_EXTENSIONS, check_output_path, write_image
 
     out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".exr")
     check_output_path(out, IMAGE_WRITE_EXTENSIONS)
     size = _size(args.size) if args.size else None
-    scene = as_scene(args.scene)
+    scene = _scene_argument(args)
     _check_render_memory(out, size or tuple(scene.camera.size))
     image = render(scene, method=args.method, size=size, seed=args.seed, spp=args.spp, **_params(args.param))
     write_image(out, image, exposure=args.exposure, tonemap=args.tonemap, bit_depth=args.bit_depth)
@@ -319,7 +330,6 @@ def cmd_ar_run(args) -> int:
 
 
 def cmd_reference(args) -> int:
-    from .arguments import as_scene
     from .imageio import check_output_path, write_image
     from .reference import reference
 
@@ -328,7 +338,7 @@ def cmd_reference(args) -> int:
     stderr_path = out.with_name(out.stem + ".stderr" + out.suffix)
     size = _size(args.size) if args.size else None
     result = reference(
-        as_scene(args.scene),
+        _scene_argument(args),
         spp=args.spp,
         seed=args.seed,
         engine=args.engine,
@@ -516,7 +526,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("render", help="render a scene file to EXR / PNG / NPY / HDR")
-    p.add_argument("scene", help="scene file (.toml)")
+    p.add_argument("scene", help="scene file (.toml) or a glTF file (.gltf, .glb)")
+    _asset_options(p)
     p.add_argument("-o", "--output", help="output image (.exr, .png, .npy, .hdr); default SCENE_STEM.exr")
     p.add_argument("--size", help="WIDTHxHEIGHT, overrides the camera's size")
     p.add_argument("--method", help="technique name (see `reflets info`); default: the scene's, or auto")
@@ -540,7 +551,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("view", help="interactive window over the persistent renderer (orbit, pick, edit, compare)")
-    p.add_argument("scene", help="scene file (.toml)")
+    p.add_argument("scene", help="scene file (.toml) or a glTF file (.gltf, .glb)")
     p.add_argument("--size", help="WIDTHxHEIGHT of the window, overrides the camera's size")
     p.add_argument("--method", help="technique name (see `reflets info`); default: the scene's, or auto")
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="technique parameter, repeatable")
@@ -630,7 +641,8 @@ def build_parser() -> argparse.ArgumentParser:
         q.add_argument("--method", help="the renderer's method in the differential mode (default auto)")
 
     p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
-    p.add_argument("scene", help="scene file (.toml)")
+    p.add_argument("scene", help="scene file (.toml) or a glTF file (.gltf, .glb)")
+    _asset_options(p)
     p.add_argument("-o", "--output", help="output image (.exr or .npy); the standard error goes to NAME.stderr.exr")
     p.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")

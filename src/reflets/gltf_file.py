@@ -22,6 +22,7 @@ import base64
 import functools
 import threading
 import urllib.parse
+import warnings
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -77,7 +78,9 @@ class GltfFile:
         self.path = path
         self.warnings: list[str] = []
         try:
-            self.doc = pygltflib.GLTF2().load(str(path))
+            with warnings.catch_warnings():  # its own warnings about damaged files: the error below says it
+                warnings.simplefilter("ignore")
+                self.doc = pygltflib.GLTF2().load(str(path))
         except Exception as exc:  # pygltflib raises JSON, struct, key and type errors for damaged files
             reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:200]
             raise SceneError(f"cannot read glTF: {reason}", file=path) from None

@@ -196,22 +196,21 @@ class MonteCarloReference:
     def _shade(self, idx: np.ndarray, hits, dirs: np.ndarray, u: np.ndarray) -> np.ndarray:
         geo = self.geometry
         surf = geo.surface(hits.prim[idx], hits.u[idx], hits.v[idx], dirs[idx])
+        result = np.zeros((len(idx), 3))
+        bound = self._bind(surf, geo.uv(hits.prim[idx], hits.u[idx], hits.v[idx]), result)
         x, frame = surf.position, surf.frame
         to_local = np.swapaxes(frame, -1, -2)
         wo_world = -dirs[idx]
         wo = np.einsum("nij,nj->ni", to_local, wo_world)
         origin = x + geo.epsilon * surf.geometric_normal
         u = u[idx]
-        result = np.zeros((len(idx), 3))
 
-        def brdf(wi_world: np.ndarray, sel=slice(None)) -> tuple[np.ndarray, np.ndarray]:
+        def brdf(wi_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             """f(wo, wi) · cosθi for world directions (per-material evaluation)."""
-            wi = np.einsum("nij,nj->ni", to_local[sel], wi_world)
+            wi = np.einsum("nij,nj->ni", to_local, wi_world)
             f = np.zeros(wi.shape)
-            mats = surf.material[sel]
-            for m_index in np.unique(mats):
-                s = mats == m_index
-                f[s] = self.materials[m_index].eval(wo[sel][s], wi[s])
+            for s, material in bound.values():
+                f[s] = material.eval(wo[s], wi[s])
             return f * np.maximum(wi[:, 2:3], 0.0), wi
 
         # Delta lights: exact, one shadow ray each.
@@ -231,7 +230,7 @@ class MonteCarloReference:
 
         # One BRDF sample shared by the area lights and the environment.
         col = 2 * len(self.area)
-        wi_b, pdf_b = self._sample_brdf(surf.material, wo, u[:, col], u[:, col + 1])
+        wi_b, pdf_b = self._sample_brdf(bound, wo, u[:, col], u[:, col + 1])
         wi_b_world = np.einsum("nij,nj->ni", frame, wi_b)
         fcos_b, _ = brdf(wi_b_world)
         valid_b = (pdf_b > 0) & np.any(fcos_b > 0, axis=1)
@@ -251,7 +250,7 @@ class MonteCarloReference:
             cos_l, front = sampler.emitted(wi)
             p_light = np.where(front, dist * dist / (sampler.area * np.maximum(cos_l, 1e-300)), 0.0)
             fcos, wi_local = brdf(wi)
-            p_brdf = self._pdf_brdf(surf.material, wo, wi_local)
+            p_brdf = self._pdf_brdf(bound, wo, wi_local)
             ok = front & self._unoccluded(origin, wi, dist * (1.0 - 1e-4) - geo.epsilon, sampler.light)  # stop short
             weight = _mis(p_light, p_brdf, self.heuristic)
             contrib = fcos * sampler.radiance_at(y) * (weight / np.where(ok, p_light, 1.0))[:, None]
@@ -273,7 +272,7 @@ class MonteCarloReference:
             col = 2 * len(self.area) + 2
             wi, p_env = self.env.sample(u[:, col], u[:, col + 1])
             fcos, wi_local = brdf(wi)
-            p_brdf = self._pdf_brdf(surf.material, wo, wi_local)
+            p_brdf = self._pdf_brdf(bound, wo, wi_local)
             far = np.full(len(x), 4.0 * geo.radius + np.linalg.norm(x - geo.centre, axis=-1))
             ok = (p_env > 0) & self._unoccluded(origin, wi, far, self.scene.environment)
             weight = _mis(p_env, p_brdf, self.heuristic)
@@ -295,19 +294,35 @@ class MonteCarloReference:
             return np.ones(len(origin), dtype=bool)
         return ~self.geometry.occluded(origin, wi, dist)
 
-    def _sample_brdf(self, mats, wo, u1, u2):
+    def _bind(self, surf, uv: np.ndarray, emitted: np.ndarray) -> dict[int, tuple[np.ndarray, object]]:
+        """Material index → (its hits, what evaluates the BRDF there): the material itself, or for a textured one
+        (``Material.at``) its parameters at each hit's uv — with its normal map applied to ``surf.frame`` and its
+        emission added to ``emitted`` (the same order as the GPU: textures first, then the unchanged BRDF)."""
+        bound = {}
+        for m_index in np.unique(surf.material):
+            s = surf.material == m_index
+            material = self.materials[m_index]
+            if hasattr(material, "at"):
+                surf.frame[s] = material.shading_frame(surf.frame[s], uv[s])
+                emitted[s] += material.emission(uv[s])
+                bound[m_index] = (s, material.at(uv[s]))
+            else:
+                bound[m_index] = (s, material)
+        return bound
+
+    @staticmethod
+    def _sample_brdf(bound, wo, u1, u2):
         wi = np.zeros(wo.shape)
         pdf = np.zeros(len(wo))
-        for m_index in np.unique(mats):
-            s = mats == m_index
-            wi[s], pdf[s] = self.materials[m_index].sample(wo[s], u1[s], u2[s])
+        for s, material in bound.values():
+            wi[s], pdf[s] = material.sample(wo[s], u1[s], u2[s])
         return wi, pdf
 
-    def _pdf_brdf(self, mats, wo, wi):
+    @staticmethod
+    def _pdf_brdf(bound, wo, wi):
         pdf = np.zeros(len(wo))
-        for m_index in np.unique(mats):
-            s = mats == m_index
-            pdf[s] = self.materials[m_index].pdf(wo[s], wi[s])
+        for s, material in bound.values():
+            pdf[s] = material.pdf(wo[s], wi[s])
         return pdf
 
 

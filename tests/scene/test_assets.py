@@ -1,0 +1,168 @@
+"""glTF files as scenes: what is read (nodes, Draco, cameras, lights, materials, textures) and what is warned."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import reflets
+from reflets.errors import ArgumentError, RefletsWarning, SceneError
+from reflets.gltf_file import read_gltf
+from reflets.scene.geometry import mesh_data
+from reflets.textures import linear_to_srgb
+
+ASSETS = Path(__file__).parents[1] / "data" / "gltf"
+FILES = sorted(p for p in ASSETS.glob("*/*.gl*"))
+
+
+def load(path, **kw):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = reflets.load_scene(path, **kw)
+    return scene, [str(w.message) for w in caught if issubclass(w.category, RefletsWarning)]
+
+
+@pytest.mark.parametrize("path", FILES, ids=lambda p: p.stem)
+def test_every_test_asset_loads_with_a_camera_a_light_and_its_materials(path):
+    scene, _ = load(path)
+    assert scene.mesh and scene.light
+    assert all(m.material in scene.materials for m in scene.mesh)
+    points = np.concatenate([mesh_data(scene, i).positions for i in range(len(scene.mesh))])
+    assert np.ptp(points, axis=0).max() > 0  # not collapsed (Draco decoded, accessors read)
+
+
+def test_draco_box_is_decoded_to_a_unit_cube():
+    scene, _ = load(ASSETS / "Box" / "Box.gltf")
+    data = mesh_data(scene, 0)
+    assert data.n_triangles == 12
+    # the Box's root node turns y up from z up; its extent is 1 along every axis either way
+    assert np.allclose(np.ptp(data.positions, axis=0), 1.0, atol=1e-6)
+
+
+def test_node_transforms_match_trimesh_scene_graph():
+    """OrientationTest's 13 nodes (rotations and matrices): every part's world vertices equal those trimesh's
+    independent scene graph gives (same vertex order)."""
+    import trimesh
+
+    path = ASSETS / "OrientationTest" / "OrientationTest.glb"
+    scene, _ = load(path)
+    loaded = trimesh.load(str(path), process=False)
+    expected = []
+    for node in loaded.graph.nodes_geometry:
+        matrix, name = loaded.graph[node]
+        geom = loaded.geometry[name]
+        expected.append(np.sort(np.round(trimesh.transform_points(geom.vertices, matrix), 4), axis=0))
+    ours = [np.sort(np.round(mesh_data(scene, i).positions.astype(float), 4), axis=0) for i in range(len(scene.mesh))]
+    assert len(ours) == len(expected) == 13
+    unmatched = [e for e in expected if not any(o.shape == e.shape and np.allclose(o, e, atol=2e-4) for o in ours)]
+    assert not unmatched, f"{len(unmatched)} of 13 parts placed differently from trimesh's graph"
+
+
+def test_cameras_perspective_read_orthographic_warned():
+    scene, said = load(ASSETS / "Cameras" / "Cameras.gltf")
+    assert scene.camera.fov_y == pytest.approx(np.degrees(0.7))
+    assert any("orthographic" in line for line in said)
+    with pytest.raises(ArgumentError, match="no camera '5'"):
+        reflets.load_scene(ASSETS / "Cameras" / "Cameras.gltf", camera="5")
+
+
+def test_emissive_strength_and_unsupported_extensions():
+    scene, _ = load(ASSETS / "EmissiveStrengthTest" / "EmissiveStrengthTest.glb")
+    assert max(m.emissive_strength for m in scene.materials.values()) == pytest.approx(16.0)
+    _, said = load(ASSETS / "AnisotropyStrengthTest" / "AnisotropyStrengthTest.glb")
+    assert any("KHR_materials_anisotropy not supported" in line for line in said)
+
+
+def test_texture_transform_read():
+    scene, _ = load(ASSETS / "TextureTransformTest" / "TextureTransformTest.gltf")
+    transforms = [m.base_color_texture.transform for m in scene.materials.values() if m.base_color_texture]
+    assert any(t is not None and t.rotation != 0 for t in transforms)
+    assert any(t is not None and tuple(t.offset) != (0.0, 0.0) for t in transforms)
+
+
+def test_uv_orientation_reads_the_image_top_left_at_gltf_uv_origin():
+    """TextureCoordinateTest: the base colour the material reads at each vertex equals the texel of the image at
+    the vertex's glTF uv (u right, v down from the top-left), decoded independently with Pillow and trimesh."""
+    import io
+
+    import trimesh
+    from PIL import Image
+
+    path = ASSETS / "TextureCoordinateTest" / "TextureCoordinateTest.glb"
+    scene, _ = load(path)
+    loaded = trimesh.load(str(path), process=False)
+    checked = 0
+    for i, mesh in enumerate(scene.mesh):
+        material = scene.materials[mesh.material]
+        if material.base_color_texture is None:
+            continue
+        data = mesh_data(scene, i)
+        gltf_uv = np.stack([data.uvs[:, 0], 1.0 - data.uvs[:, 1]], axis=1)  # back to glTF's v down
+        inside = np.all((gltf_uv > 0.02) & (gltf_uv < 0.98), axis=1)
+        doc = read_gltf(path)
+        image = np.asarray(Image.open(io.BytesIO(doc.image_bytes(0))).convert("RGB"), np.float64) / 255.0
+        h, w = image.shape[:2]
+        texel = image[(gltf_uv[inside, 1] * h).astype(int), (gltf_uv[inside, 0] * w).astype(int)]
+        srgb = linear_to_srgb(material.at(data.uvs[inside]).base)
+        assert np.abs(srgb - texel).max() < 0.2, mesh.name
+        checked += inside.sum()
+    assert checked > 0 and len(loaded.geometry) >= 1
+
+
+def test_toml_file_mesh_without_material_takes_the_files_materials(tmp_path):
+    path = tmp_path / "scene.toml"
+    box = (ASSETS / "TextureCoordinateTest" / "TextureCoordinateTest.glb").as_posix()
+    path.write_text(
+        f"""
+[camera]
+position = [0, 0, 3]
+look_at = [0, 0, 0]
+[[mesh]]
+file = "{box}"
+transform = {{ translate = [1, 0, 0] }}
+[[light]]
+type = "point"
+position = [0, 0, 3]
+intensity = [1, 1, 1]
+""",
+        encoding="utf-8",
+    )
+    scene = reflets.load_scene(path)
+    whole, _ = load(ASSETS / "TextureCoordinateTest" / "TextureCoordinateTest.glb")
+    assert len(scene.mesh) == len(whole.mesh) > 1
+    assert all(m.material.startswith("TextureCoordinateTest/") for m in scene.mesh)
+    moved = mesh_data(scene, 0).positions - mesh_data(whole, 0).positions
+    assert np.allclose(moved, [1.0, 0.0, 0.0], atol=1e-6)  # the mesh's transform on top of the file's
+
+
+def test_ply_without_material_is_an_error(tmp_path):
+    path = tmp_path / "scene.toml"
+    path.write_text('[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n[[mesh]]\nfile = "x.ply"\n', "utf-8")
+    with pytest.raises(SceneError, match=r"mesh\[0\].material: required"):
+        reflets.load_scene(path)
+
+
+def test_damaged_gltf_is_one_line_error(tmp_path):
+    bad = tmp_path / "bad.glb"
+    bad.write_bytes(b"glTF" + b"\0" * 20)
+    with pytest.raises(SceneError, match="bad.glb"):
+        reflets.load_scene(bad)
+    text = tmp_path / "bad.gltf"
+    text.write_text('{"asset": {"version": "2.0"}, "meshes": [{"primitives": [{"attributes": {"POSITION": 3}}]}], '
+                    '"nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}]}', "utf-8")  # fmt: skip
+    with pytest.raises(SceneError, match=r"accessors\[3\] does not exist"):
+        reflets.load_scene(text)
+
+
+def test_cli_renders_a_gltf_file_with_no_other_argument(tmp_path, monkeypatch, capsys):
+    from reflets.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["render", str(ASSETS / "Box" / "Box.gltf"), "-o", "box.png", "--size", "32x24"]) == 0
+    assert (tmp_path / "box.png").is_file()
+    assert main(["render", str(ASSETS / "Box" / "Box.gltf"), "-o", "b.png", "--camera", "2"]) == 2
+    assert "no camera '2'" in capsys.readouterr().err
+    assert not (tmp_path / "b.png").exists()
