@@ -62,6 +62,11 @@ def scene_warnings(scene: Scene, method: str) -> list[str]:
         else:  # drawn by its own technique: what that cannot light
             lights = {light.type for light in scene.light}
             messages += [f"materials.{name}: {text}" for text in material.lighting_warnings(lights)]
+        if method in ("ltc", "analytic", "biased") and getattr(material, "textured", False) and _has_area_light(scene):
+            messages.append(
+                f"materials.{name}: method '{method}' lights this textured material by its constant factors under "
+                "quad / polygon lights (its textures are ignored there; auto or forward use them)"
+            )
         if method == "analytic" and _has_glossy_part(material) and _has_area_light(scene):
             messages.append(
                 f"materials.{name}: method 'analytic' integrates only Lambertian parts under quad / polygon lights; "

@@ -166,3 +166,28 @@ def test_cli_renders_a_gltf_file_with_no_other_argument(tmp_path, monkeypatch, c
     assert main(["render", str(ASSETS / "Box" / "Box.gltf"), "-o", "b.png", "--camera", "2"]) == 2
     assert "no camera '2'" in capsys.readouterr().err
     assert not (tmp_path / "b.png").exists()
+
+
+def test_textured_materials_take_the_midpoint_rule_under_area_lights_in_auto(ctx):
+    """LTC's tables read a material's constant factors: auto lights textured materials by forward's midpoint rule,
+    and an explicit --method ltc says it ignores the textures."""
+    from reflets.diagnostics import scene_warnings
+    from reflets.renderer.compose import Auto
+    from reflets.scene.model import QuadLight
+
+    scene, _ = load(ASSETS / "TextureCoordinateTest" / "TextureCoordinateTest.glb")
+    quad = QuadLight(type="quad", corners=((-1, 2, -1), (1, 2, -1), (-1, 2, 1)), radiance=(5, 5, 5), two_sided=True)
+    scene = scene.model_copy(update={"light": [quad]})
+    assert Auto(ctx)._area_method(scene) == "forward"
+    assert any("textures are ignored" in line for line in scene_warnings(scene, "ltc"))
+
+
+def test_gltf_with_a_material_is_one_mesh_read_by_reflets_reader(tmp_path):
+    """With a material, the whole file is one mesh — read by reflets' reader, so Draco data is decoded."""
+    path = tmp_path / "scene.toml"
+    box = (ASSETS / "Box" / "Box.gltf").as_posix()
+    path.write_text(f'[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n[materials.grey]\ntype = "lambert"\n'
+                    f'albedo = [0.5, 0.5, 0.5]\n[[mesh]]\nfile = "{box}"\nmaterial = "grey"\n', "utf-8")  # fmt: skip
+    scene = reflets.load_scene(path)
+    assert len(scene.mesh) == 1
+    assert np.allclose(np.ptp(mesh_data(scene, 0).positions, axis=0), 1.0, atol=1e-6)

@@ -28,6 +28,10 @@ def fingerprint(scene, **params) -> tuple[str, dict]:
     for mesh in description.get("mesh", []):
         if mesh.get("file"):
             mesh["file"] = {"name": Path(mesh["file"]).name, "sha256": file_digest(mesh["file"])}
+    for material in description.get("materials", {}).values():
+        for value in material.values():  # textures by content, like mesh files
+            if isinstance(value, dict) and value.get("texture"):
+                value["texture"] = {"name": Path(value["texture"]).name, "sha256": file_digest(value["texture"])}
     description = {"scene": description, "version": REFERENCE_VERSION, **params}
     return _digest(description), description
 
@@ -42,6 +46,9 @@ def _digest(description: dict) -> str:
     centred camera with square pixels), so that editing a caption or adding such a field keeps stored references
     valid (one of them took 38 minutes)."""
     scene = {k: v for k, v in description["scene"].items() if k not in PRESENTATION_KEYS}
+    scene["mesh"] = [  # a mesh's glTF part: None (added later) for every file mesh made before
+        {k: v for k, v in mesh.items() if not (k == "part" and v is None)} for mesh in scene.get("mesh", [])
+    ]
     scene["light"] = [
         {k: v for k, v in light.items() if not (k == "shadows" and v is True)} for light in scene.get("light", [])
     ]

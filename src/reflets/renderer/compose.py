@@ -54,6 +54,9 @@ from ..techniques.forward import (
 from ..techniques.prepared import PreparedScene
 from ..techniques.shadows import CASCADES
 
+#: area-light methods whose integrals read a material's constant parameters (tables, lobe summaries), not the
+#: per-fragment ones its textures give: ``auto`` takes ``forward``'s midpoint rule for textured materials instead
+CONSTANT_MATERIAL_METHODS = ("ltc", "analytic", "biased")
 #: the method of a scene that names none
 DEFAULT_METHOD = "auto"
 AREA_METHODS = ("ltc", "forward", "brute", "adaptive", "biased", "analytic", "mc")
@@ -212,6 +215,8 @@ class Auto(Technique):
         masked = any(getattr(light, "mask", None) is not None for light in scene.light)
         if masked and method != "forward" and not getattr(get_technique(method), "supports_masks", False):
             return "forward"
+        if method in CONSTANT_MATERIAL_METHODS and any(getattr(m, "textured", False) for m in scene.materials.values()):
+            return "forward"  # its integrals take a material's constant parameters, not its textures
         return method
 
     @property

@@ -306,3 +306,19 @@ def part_mesh(path: str | Path, part: int) -> MeshData:
         indices=faces.astype(np.uint32),
     )
     return local.transformed(instance.matrix)
+
+
+def merged_mesh(path: Path) -> MeshData:
+    """Every primitive instance of a glTF file's default scene in one mesh (a material given in the scene)."""
+    count = len(read_gltf(path).instances())
+    parts = [part_mesh(path, k) for k in range(count)]
+    if not parts:
+        raise SceneError("contains no triangles (only points, lines or nothing)", file=path)
+    offsets = np.cumsum([0] + [p.n_vertices for p in parts[:-1]])
+    return MeshData(
+        positions=np.concatenate([p.positions for p in parts]),
+        normals=np.concatenate([p.normals for p in parts]),
+        tangents=np.concatenate([p.tangents for p in parts]),
+        uvs=np.concatenate([p.uvs for p in parts]),
+        indices=np.concatenate([p.indices + np.uint32(o) for p, o in zip(parts, offsets, strict=True)]),
+    )

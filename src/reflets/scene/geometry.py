@@ -69,6 +69,10 @@ def _build_mesh_data(scene: Scene, index: int) -> MeshData:
             from .assets import part_mesh
 
             local = part_mesh(scene.resolve(mesh.file), mesh.part)
+        elif isinstance(mesh, FileMesh) and mesh.file.suffix.lower() in (".gltf", ".glb"):
+            from .assets import merged_mesh  # reflets' reader: Draco, sparse and quantized data, node transforms
+
+            local = merged_mesh(scene.resolve(mesh.file))
         elif isinstance(mesh, FileMesh):
             local = load_mesh_file(scene.resolve(mesh.file))
         else:

@@ -274,9 +274,6 @@ def load_mesh_file(path: str | Path) -> MeshData:
     if not path.is_file():
         raise SceneError("mesh file not found" if not path.exists() else "is not a regular file", file=path)
 
-    if ext in (".gltf", ".glb"):  # reflets' own reader: Draco, sparse and quantized data, node transforms
-        return _merged_gltf(path)
-
     import trimesh  # heavy import, only needed by scenes that use mesh files
 
     try:
@@ -318,21 +315,3 @@ def load_mesh_file(path: str | Path) -> MeshData:
         indices=faces.astype(np.uint32),
     )
 
-
-def _merged_gltf(path: Path) -> MeshData:
-    """Every primitive instance of a glTF file's default scene in one mesh (a material given in the scene)."""
-    from ..gltf_file import read_gltf
-    from .assets import part_mesh
-
-    count = len(read_gltf(path).instances())
-    parts = [part_mesh(path, k) for k in range(count)]
-    if not parts:
-        raise SceneError("contains no triangles (only points, lines or nothing)", file=path)
-    offsets = np.cumsum([0] + [p.n_vertices for p in parts[:-1]])
-    return MeshData(
-        positions=np.concatenate([p.positions for p in parts]),
-        normals=np.concatenate([p.normals for p in parts]),
-        tangents=np.concatenate([p.tangents for p in parts]),
-        uvs=np.concatenate([p.uvs for p in parts]),
-        indices=np.concatenate([p.indices + np.uint32(o) for p, o in zip(parts, offsets, strict=True)]),
-    )
