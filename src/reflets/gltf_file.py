@@ -44,6 +44,8 @@ WIDTHS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "M
 #: the extensions whose data this reader decodes; the material and light extensions are read by scene.assets
 DECODED = {"KHR_draco_mesh_compression", "KHR_mesh_quantization", "KHR_texture_transform"}
 TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN = 4, 5, 6
+#: the largest magnitude of a node transform's number (reflets' scene numbers are bounded alike: quantities.py)
+MAX_NUMBER = 1e12
 
 
 @dataclass
@@ -120,7 +122,7 @@ class GltfFile:
     def _read_uri(self, uri: str, where: str) -> bytes:
         if uri.startswith("data:"):
             try:
-                return base64.b64decode(uri.split(",", 1)[1])
+                return base64.b64decode(uri.split(",", 1)[1], validate=True)
             except (IndexError, ValueError):
                 raise SceneError(f"{where}: invalid data URI", file=self.path) from None
         target = self.path.parent / urllib.parse.unquote(uri)
@@ -297,6 +299,7 @@ class GltfFile:
         children = {c for node in self.doc.nodes or [] for c in node.children or []}
         return [i for i in range(len(self.doc.nodes or [])) if i not in children]
 
+    @functools.cached_property
     def world_matrices(self) -> dict[int, np.ndarray]:
         """Node index → its world matrix, for every node of the default scene (depth first; a cycle is an error)."""
         nodes = self.doc.nodes or []
@@ -308,15 +311,20 @@ class GltfFile:
                 raise SceneError(f"nodes[{index}] does not exist", file=self.path)
             if index in out:
                 raise SceneError(f"nodes[{index}] is reached twice (a node has one parent)", file=self.path)
-            out[index] = parent @ node_matrix(nodes[index])
+            try:
+                out[index] = parent @ node_matrix(nodes[index], f"nodes[{index}]")
+            except ValueError as exc:
+                raise SceneError(str(exc), file=self.path) from None
             stack.extend((child, out[index]) for child in reversed(nodes[index].children or []))
         return out
 
+    @functools.cached_property
     def instances(self) -> list[Instance]:
-        """Every primitive of every mesh node of the default scene, in node order."""
+        """Every primitive of every mesh node of the default scene, in node order (a node scaled to nothing — glTF's
+        way of hiding it — has none)."""
         out = []
         meshes = self.doc.meshes or []
-        for node_index, matrix in self.world_matrices().items():
+        for node_index, matrix in self.world_matrices.items():
             node = self.doc.nodes[node_index]
             if node.mesh is None:
                 continue
@@ -324,6 +332,8 @@ class GltfFile:
                 raise SceneError(f"nodes[{node_index}].mesh: meshes[{node.mesh}] does not exist", file=self.path)
             if node.skin is not None:
                 self.warnings.append(f"nodes[{node_index}]: skin ignored (the rest pose is rendered)")
+            if abs(np.linalg.det(matrix[:3, :3])) < 1e-300:
+                continue
             mesh = meshes[node.mesh]
             for p in range(len(mesh.primitives or [])):
                 name = node.name or mesh.name or f"node {node_index}"
@@ -332,24 +342,44 @@ class GltfFile:
         return out
 
 
-def node_matrix(node) -> np.ndarray:
-    """A node's local matrix: ``matrix`` (column-major) or T · R · S."""
-    if node.matrix is not None and list(node.matrix) != [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]:
-        return np.asarray(node.matrix, dtype=np.float64).reshape(4, 4).T
+def node_matrix(node, where: str = "node") -> np.ndarray:
+    """A node's local matrix: ``matrix`` (column-major) or T · R · S; malformed or non-finite values are errors (a
+    ValueError naming ``where``'s field), a rotation is normalised (exporters write nearly-unit quaternions)."""
+
+    def numbers(name: str, count: int) -> np.ndarray | None:
+        value = getattr(node, name)
+        if value is None:
+            return None
+        try:
+            array = np.asarray(value, dtype=np.float64).ravel()
+        except (TypeError, ValueError):
+            array = np.zeros(0)
+        if array.size != count or not np.all(np.isfinite(array)) or np.abs(array).max() > MAX_NUMBER:
+            raise ValueError(f"{where}.{name}: needs {count} finite numbers of magnitude ≤ {MAX_NUMBER:g}, "
+                             f"got {value!r}")  # fmt: skip
+        return array
+
+    matrix = numbers("matrix", 16)
+    if matrix is not None and list(matrix) != [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]:
+        return matrix.reshape(4, 4).T
     m = np.eye(4)
-    if node.scale is not None:
-        m = np.diag([*map(float, node.scale), 1.0])
-    if node.rotation is not None:
-        m = _quaternion_matrix(node.rotation) @ m
-    if node.translation is not None:
-        m[:3, 3] += np.asarray(node.translation, dtype=np.float64)
+    scale = numbers("scale", 3)
+    if scale is not None:
+        m = np.diag([*scale, 1.0])
+    rotation = numbers("rotation", 4)
+    if rotation is not None:
+        norm = np.linalg.norm(rotation)
+        if norm < 1e-6:
+            raise ValueError(f"{where}.rotation: a zero quaternion is no rotation (a unit quaternion is needed)")
+        m = _quaternion_matrix(rotation / norm) @ m
+    translation = numbers("translation", 3)
+    if translation is not None:
+        m[:3, 3] += translation
     return m
 
 
 def _quaternion_matrix(q) -> np.ndarray:
     x, y, z, w = (float(c) for c in q)
-    norm = np.sqrt(x * x + y * y + z * z + w * w) or 1.0
-    x, y, z, w = x / norm, y / norm, z / norm, w / norm
     m = np.eye(4)
     m[:3, :3] = [
         [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],

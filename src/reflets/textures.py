@@ -203,7 +203,9 @@ def decode_image_bytes(data: bytes, what: str) -> np.ndarray:
             return np.asarray(image.convert("RGBA"), dtype=np.uint8).copy()
     except SceneError:
         raise
-    except Exception as exc:  # Pillow raises many types for damaged or unknown data
+    except Image.UnidentifiedImageError:
+        raise SceneError(f"{what}: not an image Pillow reads (PNG, JPEG, WebP…)") from None
+    except Exception as exc:  # Pillow raises many types for damaged data
         raise SceneError(f"{what}: cannot decode the image ({type(exc).__name__}: {exc})") from None
 
 
@@ -224,10 +226,10 @@ def texture_data(codes_source, key_source: bytes, srgb: bool, wrap=("repeat", "r
     return data
 
 
-def load_texture(ref: TextureRef, resolve, role_srgb: bool, field: str) -> TextureData:
-    """The texels of ``ref`` (``resolve`` makes its path absolute: the scene's), decoded for its role."""
-    path = resolve(ref.texture)
+def load_texture(ref: TextureRef, role_srgb: bool) -> TextureData:
+    """The texels of ``ref`` (its path absolute: the scene loader makes it so), decoded for its role."""
     srgb = role_srgb if ref.srgb is None else ref.srgb
+    path = Path(ref.texture)
     if ref.image is not None:
         from .gltf_file import read_gltf  # an image inside a glTF file
 
@@ -235,11 +237,9 @@ def load_texture(ref: TextureRef, resolve, role_srgb: bool, field: str) -> Textu
         what = f"{path}: images[{ref.image}]"
     else:
         try:
-            data = Path(path).read_bytes()
+            data = path.read_bytes()
         except OSError as exc:
-            raise SceneError(
-                f"{field}: cannot read the texture ({exc.strerror or type(exc).__name__})", file=path
-            ) from None
+            raise SceneError(f"cannot read the texture ({exc.strerror or type(exc).__name__})", file=path) from None
         what = str(path)
     return texture_data(lambda: decode_image_bytes(data, what), data, srgb, ref.wrap, ref.filter == "nearest")
 

@@ -196,7 +196,7 @@ class Gltf(Material):
         if ref is None:
             return None
         srgb = next(s for f, _, s, _ in SLOTS if f == field)
-        return load_texture(ref, Path, srgb, field)  # paths made absolute by the scene loader
+        return load_texture(ref, srgb)
 
     def _lookup(self, field: str, uv: np.ndarray) -> np.ndarray | None:
         """(N, 4) texels of a slot at mesh uv (N, 2), or None."""

@@ -33,6 +33,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..gltf_file import GltfFile, read_gltf
+from ..quantities import MAX_MAGNITUDE
 from .meshdata import MeshData
 
 #: the file extensions that carry materials (and so may stand without ``material`` in a scene)
@@ -75,7 +76,7 @@ def load_asset(path: str | Path) -> Asset:
     materials = {names[i]: _material(gltf, i, warnings) for i in range(len(gltf.doc.materials or []))}
     parts = []
     default_material = None
-    for index, instance in enumerate(gltf.instances()):
+    for index, instance in enumerate(gltf.instances):
         material = gltf.doc.meshes[instance.mesh].primitives[instance.primitive].material
         if material is None:
             default_material = default_material or _unique("default", names)
@@ -147,10 +148,6 @@ def _texture(gltf: GltfFile, info, where: str, warnings: list[str]) -> dict | No
         ref["wrap"] = (WRAPS.get(sampler.wrapS or 10497, "repeat"), WRAPS.get(sampler.wrapT or 10497, "repeat"))
         if sampler.magFilter in NEAREST_FILTERS:
             ref["filter"] = "nearest"
-    if ref["uv"] != 0:
-        warnings.append(f"{gltf.path.name}: {where} reads TEXCOORD_{ref['uv']}; reflets meshes carry one uv set, "
-                        "TEXCOORD_0 is used")  # fmt: skip
-        ref["uv"] = 0
     return ref
 
 
@@ -208,7 +205,7 @@ def _basis(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def _cameras(gltf: GltfFile, warnings: list[str]) -> list[dict]:
     out = []
     cameras = gltf.doc.cameras or []
-    for node_index, matrix in gltf.world_matrices().items():
+    for node_index, matrix in gltf.world_matrices.items():
         node = gltf.doc.nodes[node_index]
         if node.camera is None:
             continue
@@ -222,11 +219,16 @@ def _cameras(gltf: GltfFile, warnings: list[str]) -> list[dict]:
             continue
         position, forward, up = _basis(matrix)
         p = camera.perspective
+        where = f"cameras[{node.camera}].perspective"
+        if not (isinstance(p.yfov, int | float) and 0.0 < p.yfov < math.pi):
+            raise SceneError(f"{where}.yfov: must be in (0, π) radians, got {p.yfov!r}", file=gltf.path)
+        if p.aspectRatio is not None and not (isinstance(p.aspectRatio, int | float) and 1e-3 < p.aspectRatio < 1e3):
+            raise SceneError(f"{where}.aspectRatio: must be in (0.001, 1000), got {p.aspectRatio!r}", file=gltf.path)
         fields = {
             "position": tuple(map(float, position)),
             "look_at": tuple(map(float, position + forward)),
             "up": tuple(map(float, up)),
-            "fov_y": float(np.clip(math.degrees(p.yfov), 1e-3, 179.0)),
+            "fov_y": float(min(math.degrees(p.yfov), 179.0)),
             "near": float(p.znear) if p.znear else None,
             "far": float(p.zfar) if p.zfar else None,
         }
@@ -239,7 +241,7 @@ def _cameras(gltf: GltfFile, warnings: list[str]) -> list[dict]:
 def _lights(gltf: GltfFile, warnings: list[str]) -> list[dict]:
     defined = ((gltf.doc.extensions or {}).get("KHR_lights_punctual") or {}).get("lights") or []
     out = []
-    for node_index, matrix in gltf.world_matrices().items():
+    for node_index, matrix in gltf.world_matrices.items():
         ref = ((gltf.doc.nodes[node_index].extensions or {}).get("KHR_lights_punctual") or {}).get("light")
         if ref is None:
             continue
@@ -274,7 +276,7 @@ def part_mesh(path: str | Path, part: int) -> MeshData:
     from .meshfile import _unit, compute_tangents, spherical_uv
 
     gltf = read_gltf(path)
-    instances = gltf.instances()
+    instances = gltf.instances
     if not 0 <= part < len(instances):
         raise SceneError(f"part {part} does not exist: the file has {len(instances)} primitive instances", file=path)
     instance = instances[part]
@@ -305,12 +307,17 @@ def part_mesh(path: str | Path, part: int) -> MeshData:
         uvs=mesh_uv.astype(np.float32),
         indices=faces.astype(np.uint32),
     )
-    return local.transformed(instance.matrix)
+    world = local.transformed(instance.matrix)
+    extent = np.abs(world.positions).max()
+    if not np.isfinite(extent) or extent > MAX_MAGNITUDE:
+        raise SceneError(f"{where} placed by nodes[{instance.node}]: vertex coordinates up to {extent:.3g}, over "
+                         f"{MAX_MAGNITUDE:.0e}", file=path)  # fmt: skip
+    return world
 
 
 def merged_mesh(path: Path) -> MeshData:
     """Every primitive instance of a glTF file's default scene in one mesh (a material given in the scene)."""
-    count = len(read_gltf(path).instances())
+    count = len(read_gltf(path).instances)
     parts = [part_mesh(path, k) for k in range(count)]
     if not parts:
         raise SceneError("contains no triangles (only points, lines or nothing)", file=path)

@@ -221,7 +221,10 @@ def _check_textures(scene: Scene, name: str, material, source) -> None:
             continue
         path = scene.resolve(ref.texture)
         if not path.is_file():
-            raise SceneError(f"texture not found: {path}", file=source, field=f"materials.{name}.{key}")
+            what = "is a directory" if path.is_dir() else "not found"
+            raise SceneError(f"texture {what}: {path}", file=source, field=f"materials.{name}.{key}")
+        if ref.uv != 0:
+            _warn([f"materials.{name}.{key}: reads uv set {ref.uv}; reflets meshes carry one uv set, uv 0 is used"])
         if ref.image is not None:
             from ..gltf_file import read_gltf
 
@@ -234,6 +237,10 @@ def _check_textures(scene: Scene, name: str, material, source) -> None:
                                  field=f"materials.{name}.{key}.image")  # fmt: skip
         if path != ref.texture:
             setattr(material, key, ref.model_copy(update={"texture": path}))
+        try:  # decoded now (and cached for the renderers), so that a damaged image fails here, not mid-render
+            material.texture_data(key)
+        except SceneError as exc:
+            raise SceneError(exc.message, file=exc.file, field=f"materials.{name}.{key}") from None
 
 
 def did_you_mean(word: str, choices) -> str:
