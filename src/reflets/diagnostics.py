@@ -62,7 +62,7 @@ def scene_warnings(scene: Scene, method: str) -> list[str]:
         else:  # drawn by its own technique: what that cannot light
             lights = {light.type for light in scene.light}
             messages += [f"materials.{name}: {text}" for text in material.lighting_warnings(lights)]
-        if method in ("ltc", "analytic", "biased") and getattr(material, "textured", False) and _has_area_light(scene):
+        if method in ("ltc", "analytic", "biased") and material.textured and _has_area_light(scene):
             messages.append(
                 f"materials.{name}: method '{method}' lights this textured material by its constant factors under "
                 "quad / polygon lights (its textures are ignored there; auto or forward use them)"

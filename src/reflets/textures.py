@@ -34,6 +34,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from .errors import SceneError
+from .imageio import linear_to_srgb, srgb_to_linear
 
 Wrap = Literal["repeat", "clamp", "mirror"]
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False, ge=-1e6, le=1e6)]
@@ -80,20 +81,11 @@ class TextureRef(BaseModel):
         return (self.transform.matrix() if self.transform is not None else np.eye(3)) @ flip
 
 
-#: the decoded images kept in memory (their float copies are large: 2048² RGBA = 64 MB), least recently used out
-TEXTURE_CACHE_ENTRIES = 16
+#: bytes of decoded textures kept in memory (a 2048² map holds 16 MB of codes and 64 MB of float texels), least
+#: recently used out
+TEXTURE_CACHE_BYTES = 512 * 2**20
 _DECODED: OrderedDict[str, TextureData] = OrderedDict()
 _LOCK = threading.Lock()
-
-
-def srgb_to_linear(c: np.ndarray) -> np.ndarray:
-    """IEC 61966-2-1 decoding, exact (the same curve the GPU's sRGB formats apply)."""
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-def linear_to_srgb(c: np.ndarray) -> np.ndarray:
-    c = np.clip(c, 0.0, 1.0)
-    return np.where(c <= 0.0031308, c * 12.92, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
 
 
 @dataclass
@@ -112,6 +104,10 @@ class TextureData:
         if self.srgb:
             values[..., :3] = srgb_to_linear(values[..., :3])
         self.texels = values
+
+    @property
+    def nbytes(self) -> int:
+        return int(self.codes.nbytes + self.texels.nbytes)
 
     @property
     def size(self) -> tuple[int, int]:
@@ -137,15 +133,15 @@ class TextureData:
         return (top * (1 - fy) + bottom * fy).astype(np.float64)
 
     def mip_chain(self) -> list[np.ndarray]:
-        """uint8 (h, w, 4) levels down to 1×1, each the 2×2 box mean of the one above in linear values (an odd
-        side keeps its last row / column once), re-encoded like level 0."""
+        """uint8 (h, w, 4) levels down to 1×1, each the box mean of the one above in linear values (2×2 texels; an
+        odd side's last three rows / columns merge into one), re-encoded like level 0."""
         levels = [self.codes]
-        linear = self.texels.astype(np.float64)
+        linear = self.texels
         while linear.shape[0] > 1 or linear.shape[1] > 1:
-            linear = _halve(linear)
+            linear = _halve(_halve(linear, 0), 1)
             encoded = linear.copy()
             if self.srgb:
-                encoded[..., :3] = linear_to_srgb(encoded[..., :3])
+                encoded[..., :3] = linear_to_srgb(np.clip(encoded[..., :3], 0.0, 1.0))
             levels.append(np.clip(np.rint(encoded * 255.0), 0, 255).astype(np.uint8))
         return levels
 
@@ -164,21 +160,16 @@ def _wrap(i: np.ndarray, n: int, mode: str) -> np.ndarray:
     return np.mod(i, n)
 
 
-def _halve(a: np.ndarray) -> np.ndarray:
-    h, w = a.shape[:2]
-    if h > 1:
-        a = a[: h - h % 2 : 2] * 0.5 + a[1 : h - h % 2 + 1 : 2] * 0.5 if h % 2 == 0 else _halve_odd(a, 0)
-    if w > 1:
-        a = a[:, 0 : w - w % 2 : 2] * 0.5 + a[:, 1 : w - w % 2 + 1 : 2] * 0.5 if w % 2 == 0 else _halve_odd(a, 1)
-    return a
-
-
-def _halve_odd(a: np.ndarray, axis: int) -> np.ndarray:
-    """An odd side: pairs averaged, the last row / column folded into the last pair (weights ⅓ each)."""
+def _halve(a: np.ndarray, axis: int) -> np.ndarray:
+    """Half as many rows (axis 0) or columns (axis 1), each the mean of two; an odd count's last three merge into
+    one (weights ⅓); a single one stays."""
     n = a.shape[axis]
+    if n == 1:
+        return a
     a = np.moveaxis(a, axis, 0)
     out = a[0 : n - 1 : 2] * 0.5 + a[1:n:2] * 0.5
-    out[-1] = (a[n - 3] + a[n - 2] + a[n - 1]) / 3.0
+    if n % 2:
+        out[-1] = (a[n - 3] + a[n - 2] + a[n - 1]) / 3.0
     return np.moveaxis(out, 0, axis)
 
 
@@ -221,7 +212,7 @@ def texture_data(codes_source, key_source: bytes, srgb: bool, wrap=("repeat", "r
     data.texels.flags.writeable = False
     with _LOCK:
         _DECODED[key] = data
-        while len(_DECODED) > TEXTURE_CACHE_ENTRIES:
+        while sum(d.nbytes for d in _DECODED.values()) > TEXTURE_CACHE_BYTES and len(_DECODED) > 1:
             _DECODED.popitem(last=False)
     return data
 

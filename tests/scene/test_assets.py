@@ -11,8 +11,8 @@ import pytest
 import reflets
 from reflets.errors import ArgumentError, RefletsWarning, SceneError
 from reflets.gltf_file import read_gltf
+from reflets.imageio import linear_to_srgb
 from reflets.scene.geometry import mesh_data
-from reflets.textures import linear_to_srgb
 
 ASSETS = Path(__file__).parents[1] / "data" / "gltf"
 FILES = sorted(p for p in ASSETS.glob("*/*.gl*"))

@@ -125,6 +125,30 @@ class Material(BaseModel):
         """GPU textures the GLSL twin samples, by sampler uniform name (e.g. measured tables); none by default."""
         return {}
 
+    # What varies over a surface (a textured material): the reference asks at each hit, the GLSL twin answers in
+    # ``material_surface`` (reflets/brdf/glsl/gltf.glsl). A material with constant parameters keeps these defaults.
+
+    @property
+    def textured(self) -> bool:
+        """Some parameter is read from a texture (methods that integrate constant parameters cannot show it)."""
+        return False
+
+    #: the GLSL twin gives the split sum's albedos per fragment (``material_ibl``): no albedo curve is computed
+    fragment_ibl: ClassVar[bool] = False
+
+    def at(self, uv: np.ndarray):
+        """What evaluates the BRDF at N surface points of mesh uv (N, 2): ``eval`` / ``sample`` / ``pdf`` over (N, 3)
+        directions, one per point. Constant parameters: the material itself."""
+        return self
+
+    def shading_frame(self, frame: np.ndarray, uv: np.ndarray) -> np.ndarray:
+        """The shading frames (N, 3, 3; columns t, b, n) at mesh uv (N, 2), once a normal map has turned them."""
+        return frame
+
+    def emission(self, uv: np.ndarray) -> np.ndarray:
+        """Emitted radiance (N, 3) at mesh uv (N, 2)."""
+        return np.zeros((len(uv), 3))
+
 
 def register_material(cls: type[Material]) -> type[Material]:
     """Class decorator: make a material selectable by its ``type`` name. Duplicate names are errors."""

@@ -26,6 +26,7 @@ from typing import Annotated, ClassVar, Literal
 import numpy as np
 from pydantic import Field
 
+from ..cache import Cache, source_hash
 from ..quantities import NonNeg
 from ..textures import TextureRef, load_texture
 from .base import RGB, Material, Unit, register_material
@@ -68,10 +69,8 @@ class GltfPoints:
             dv = np.where(up, d * g2 / (4.0 * wo[..., 2] * wi[..., 2]), 0.0)
         f_d = DIELECTRIC_F0 + (1.0 - DIELECTRIC_F0) * schlick
         f_m = self.base + (1.0 - self.base) * schlick[..., None]
-        m = self.metallic[..., None]
-        value = (1.0 - m) * ((1.0 - f_d)[..., None] * self.base / np.pi + (f_d * dv)[..., None]) + m * f_m * dv[
-            ..., None
-        ]
+        m, dv, f_d = self.metallic[..., None], dv[..., None], f_d[..., None]
+        value = (1.0 - m) * ((1.0 - f_d) * self.base / np.pi + f_d * dv) + m * f_m * dv
         return np.where(up[..., None], value, 0.0)
 
     def _specular_probability(self) -> np.ndarray:
@@ -129,6 +128,7 @@ class Gltf(Material):
 
     type: Literal["gltf"] = "gltf"
     glsl: ClassVar[str] = "reflets/brdf/glsl/gltf.glsl"
+    fragment_ibl: ClassVar[bool] = True
 
     base_color: Rgba = (1.0, 1.0, 1.0, 1.0)
     base_color_texture: TextureRef | None = None
@@ -221,12 +221,6 @@ class Gltf(Material):
         if texels is not None:
             metallic, roughness = metallic * texels[:, 2], roughness * texels[:, 1]
         return GltfPoints(base=base, metallic=metallic, alpha=np.maximum(roughness * roughness, MIN_ALPHA))
-
-    def coverage(self, uv: np.ndarray) -> np.ndarray:
-        """Alpha (N,) at mesh uv: the base colour's alpha × its texture's."""
-        alpha = np.full(len(uv), float(self.base_color[3]))
-        texels = self._lookup("base_color_texture", uv)
-        return alpha if texels is None else alpha * texels[:, 3]
 
     def emission(self, uv: np.ndarray) -> np.ndarray:
         """Emitted radiance (N, 3) at mesh uv."""
@@ -326,17 +320,7 @@ def ibl_table(size: int = IBL_TABLE_SIZE, side: int = IBL_TABLE_SAMPLES) -> np.n
     return out.astype(np.float32)
 
 
-def _ibl_table_cached() -> np.ndarray:
-    from ..cache import Cache, source_hash
-
-    global _IBL_CACHE
-    if _IBL_CACHE is None:
-        _IBL_CACHE = Cache("gltf-ibl", lambda path: np.load(path)["table"], lambda t, path: np.savez(path, table=t))
-    key = f"{IBL_TABLE_SIZE}-{IBL_TABLE_SAMPLES}-{source_hash(Path(__file__))}"
-    return _IBL_CACHE.get(key, ibl_table)
-
-
-_IBL_CACHE = None
+IBL_TABLES = Cache("gltf-ibl", lambda path: np.load(path)["table"], lambda table, path: np.savez(path, table=table))
 
 
 def ibl_table_texture(ctx):
@@ -347,7 +331,8 @@ def ibl_table_texture(ctx):
 
     store = context_store(ctx, "gltf-ibl")
     if "table" not in store:
-        table = _ibl_table_cached()
+        key = f"{IBL_TABLE_SIZE}-{IBL_TABLE_SAMPLES}-{source_hash(Path(__file__))}"  # a changed BRDF: made again
+        table = IBL_TABLES.get(key, ibl_table)
         texture = ctx.texture((table.shape[1], table.shape[0]), 3, np.ascontiguousarray(table).tobytes(), dtype="f4")
         texture.filter = (moderngl.LINEAR, moderngl.LINEAR)
         texture.repeat_x = texture.repeat_y = False

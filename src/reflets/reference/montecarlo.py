@@ -295,19 +295,16 @@ class MonteCarloReference:
         return ~self.geometry.occluded(origin, wi, dist)
 
     def _bind(self, surf, uv: np.ndarray, emitted: np.ndarray) -> dict[int, tuple[np.ndarray, object]]:
-        """Material index → (its hits, what evaluates the BRDF there): the material itself, or for a textured one
-        (``Material.at``) its parameters at each hit's uv — with its normal map applied to ``surf.frame`` and its
-        emission added to ``emitted`` (the same order as the GPU: textures first, then the unchanged BRDF)."""
+        """Material index → (its hits, what evaluates the BRDF there: ``Material.at`` each hit's uv), with the
+        material's normal map applied to ``surf.frame`` and its emission added to ``emitted`` — the GPU's order:
+        textures first, then the unchanged BRDF."""
         bound = {}
         for m_index in np.unique(surf.material):
             s = surf.material == m_index
             material = self.materials[m_index]
-            if hasattr(material, "at"):
-                surf.frame[s] = material.shading_frame(surf.frame[s], uv[s])
-                emitted[s] += material.emission(uv[s])
-                bound[m_index] = (s, material.at(uv[s]))
-            else:
-                bound[m_index] = (s, material)
+            surf.frame[s] = material.shading_frame(surf.frame[s], uv[s])
+            emitted[s] += material.emission(uv[s])
+            bound[m_index] = (s, material.at(uv[s]))
         return bound
 
     @staticmethod

@@ -215,7 +215,7 @@ class Auto(Technique):
         masked = any(getattr(light, "mask", None) is not None for light in scene.light)
         if masked and method != "forward" and not getattr(get_technique(method), "supports_masks", False):
             return "forward"
-        if method in CONSTANT_MATERIAL_METHODS and any(getattr(m, "textured", False) for m in scene.materials.values()):
+        if method in CONSTANT_MATERIAL_METHODS and any(m.textured for m in scene.materials.values()):
             return "forward"  # its integrals take a material's constant parameters, not its textures
         return method
 

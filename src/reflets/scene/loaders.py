@@ -142,15 +142,9 @@ def scene_from_asset(path: str | Path, camera: int | str | None = None, environm
             raise ArgumentError(f"environment map not found: {env}", field="--environment")
         lights.append({"type": "environment", "file": env.absolute()})
     names = [c["name"] for c in asset.cameras]
-    if camera is None:
-        chosen = asset.cameras[0]["fields"] if asset.cameras else None
-    else:
-        index = names.index(camera) if camera in names else None
-        if index is None:
-            try:
-                index = int(camera)
-            except (TypeError, ValueError):
-                index = -1
+    chosen = asset.cameras[0]["fields"] if asset.cameras else None
+    if camera is not None:  # a name, else an index
+        index = names.index(camera) if camera in names else int(camera) if str(camera).isdigit() else -1
         if not 0 <= index < len(names):
             listed = ", ".join(f"{k} ({n})" for k, n in enumerate(names)) or "none"
             raise ArgumentError(f"no camera {camera!r} in {path.name}; its cameras: {listed}", field="--camera")

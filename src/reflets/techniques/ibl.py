@@ -188,14 +188,20 @@ class PrefilteredEnvironment:
         return {"ENV_IBL": 1, "IBL_LEVELS": LEVELS, "IBL_NODES": ALBEDO_NODES}
 
     def uniforms(self, material) -> dict[str, object]:
-        """The material's split-sum inputs (its albedo curve from the cache: computed once per material)."""
+        """The material's split-sum inputs (its albedo curve from the cache: computed once per material; none for a
+        material that gives them per fragment)."""
+        maps = {
+            "u_ibl_env_from_world": self.env_from_world,
+            "u_ibl_radiance": IBL_UNITS[0],
+            "u_ibl_irradiance": IBL_UNITS[1],
+        }
+        if material.fragment_ibl:
+            return maps
         return {
             "u_ibl_albedo": cached_specular_albedo(material).astype(np.float32).tobytes(),
             "u_ibl_diffuse": tuple(float(c) for c in material.lambertian_split()[0]),
             "u_ibl_alpha": equivalent_alpha(material),
-            "u_ibl_env_from_world": self.env_from_world,
-            "u_ibl_radiance": IBL_UNITS[0],
-            "u_ibl_irradiance": IBL_UNITS[1],
+            **maps,
         }
 
     def bind(self) -> None:
