@@ -90,11 +90,7 @@ def load_asset(path: str | Path) -> Asset:
         parts.append({"file": path, "part": index, "name": instance.name, "material": name})
     cameras, lights = _cameras(gltf, warnings), _lights(gltf, warnings)
     warnings += gltf.warnings
-    return Asset(path, parts, materials, cameras, lights, _dedupe(warnings))
-
-
-def _dedupe(lines: list[str]) -> list[str]:
-    return list(dict.fromkeys(lines))
+    return Asset(path, parts, materials, cameras, lights, list(dict.fromkeys(warnings)))  # each line once
 
 
 def _unique(name: str, taken) -> str:
