@@ -77,7 +77,9 @@ def _scene_argument(args):
 
 def _asset_options(p) -> None:
     p.add_argument("--camera", help="a glTF file's camera (index or name; default its first, else one framing it)")
-    p.add_argument("--environment", help="an HDR map lighting a glTF file (default: its lights, else a studio map)")
+    p.add_argument(
+        "--environment", help="an HDR map lighting a glTF / OBJ file (default: its lights, else a studio map)"
+    )
 
 
 def cmd_render(args) -> int:
@@ -526,7 +528,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("render", help="render a scene file to EXR / PNG / NPY / HDR")
-    p.add_argument("scene", help="scene file (.toml) or a glTF file (.gltf, .glb)")
+    p.add_argument("scene", help="scene file (.toml), or a glTF (.gltf, .glb) or OBJ (.obj + .mtl) file")
     _asset_options(p)
     p.add_argument("-o", "--output", help="output image (.exr, .png, .npy, .hdr); default SCENE_STEM.exr")
     p.add_argument("--size", help="WIDTHxHEIGHT, overrides the camera's size")
@@ -551,7 +553,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("view", help="interactive window over the persistent renderer (orbit, pick, edit, compare)")
-    p.add_argument("scene", help="scene file (.toml) or a glTF file (.gltf, .glb)")
+    p.add_argument("scene", help="scene file (.toml), or a glTF (.gltf, .glb) or OBJ (.obj + .mtl) file")
     p.add_argument("--size", help="WIDTHxHEIGHT of the window, overrides the camera's size")
     p.add_argument("--method", help="technique name (see `reflets info`); default: the scene's, or auto")
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="technique parameter, repeatable")
@@ -641,7 +643,7 @@ def build_parser() -> argparse.ArgumentParser:
         q.add_argument("--method", help="the renderer's method in the differential mode (default auto)")
 
     p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
-    p.add_argument("scene", help="scene file (.toml) or a glTF file (.gltf, .glb)")
+    p.add_argument("scene", help="scene file (.toml), or a glTF (.gltf, .glb) or OBJ (.obj + .mtl) file")
     _asset_options(p)
     p.add_argument("-o", "--output", help="output image (.exr or .npy); the standard error goes to NAME.stderr.exr")
     p.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")

@@ -64,7 +64,8 @@ class TextureRef(BaseModel):
     ``texture``: an image file (PNG, JPEG…; relative to the scene file), or a glTF file with ``image`` = the index
     of one of its images (embedded or not); ``uv``: the uv set; ``srgb``: how colour is encoded (None: by the
     parameter's role — colour sRGB, data linear); ``transform``: KHR_texture_transform; ``wrap``: (s, t) wrap
-    modes; ``filter``: "linear" (trilinear mips, anisotropic) or "nearest"."""
+    modes; ``filter``: "linear" (trilinear mips, anisotropic) or "nearest"; ``channels``: a swizzle applied when
+    decoding (an MTL map's ``-imfchan``: one grey map feeding one channel of a packed slot)."""
 
     model_config = ConfigDict(extra="forbid")
     texture: Path
@@ -74,6 +75,12 @@ class TextureRef(BaseModel):
     transform: TextureTransform | None = None
     wrap: tuple[Wrap, Wrap] = ("repeat", "repeat")
     filter: Literal["linear", "nearest"] = "linear"
+    channels: str | None = Field(
+        None,
+        pattern="^[rgba01]{4}$",
+        description="which image channel (r, g, b, a) or constant (0, 1) each of the parameter's R, G, B, A reads, "
+        'e.g. "1r11" puts a grey roughness map where metallic-roughness reads roughness (G); None: as stored',
+    )
 
     def uv_matrix(self) -> np.ndarray:
         """3×3 matrix from mesh uv (v up) to image uv (v down, transform applied)."""
@@ -200,14 +207,25 @@ def decode_image_bytes(data: bytes, what: str) -> np.ndarray:
         raise SceneError(f"{what}: cannot decode the image ({type(exc).__name__}: {exc})") from None
 
 
-def texture_data(codes_source, key_source: bytes, srgb: bool, wrap=("repeat", "repeat"), nearest=False) -> TextureData:
+def swizzled(codes: np.ndarray, channels: str | None) -> np.ndarray:
+    """(H, W, 4) codes rearranged by a ``TextureRef.channels`` string (the same array when None)."""
+    if channels is None or channels == "rgba":
+        return codes
+    constants = {"0": 0, "1": 255}
+    planes = [codes[..., "rgba".index(c)] if c in "rgba" else np.full(codes.shape[:2], constants[c], np.uint8)
+              for c in channels]  # fmt: skip
+    return np.ascontiguousarray(np.stack(planes, axis=-1))
+
+
+def texture_data(codes_source, key_source: bytes, srgb: bool, wrap=("repeat", "repeat"), nearest=False,
+                 channels: str | None = None) -> TextureData:  # fmt: skip
     """The decoded texture of some image bytes (``codes_source()`` decodes them), cached by content and role."""
-    key = hashlib.sha1(key_source + repr((srgb, tuple(wrap), nearest)).encode()).hexdigest()
+    key = hashlib.sha1(key_source + repr((srgb, tuple(wrap), nearest, channels)).encode()).hexdigest()
     with _LOCK:
         if key in _DECODED:
             _DECODED.move_to_end(key)
             return _DECODED[key]
-    data = TextureData(codes_source(), srgb, key, tuple(wrap), nearest)
+    data = TextureData(swizzled(codes_source(), channels), srgb, key, tuple(wrap), nearest)
     data.codes.flags.writeable = False
     data.texels.flags.writeable = False
     with _LOCK:
@@ -232,7 +250,8 @@ def load_texture(ref: TextureRef, role_srgb: bool) -> TextureData:
         except OSError as exc:
             raise SceneError(f"cannot read the texture ({exc.strerror or type(exc).__name__})", file=path) from None
         what = str(path)
-    return texture_data(lambda: decode_image_bytes(data, what), data, srgb, ref.wrap, ref.filter == "nearest")
+    decode = lambda: decode_image_bytes(data, what)  # noqa: E731
+    return texture_data(decode, data, srgb, ref.wrap, ref.filter == "nearest", ref.channels)
 
 
 SRGB8_ALPHA8 = 0x8C43

@@ -1,4 +1,5 @@
-"""Real assets as scenes: a glTF file's parts, materials, cameras and lights in reflets' scene model.
+"""Real assets as scenes: a glTF file's parts, materials, cameras and lights in reflets' scene model (an OBJ
+file's parts and MTL materials: ``reflets.scene.obj_asset``).
 
 ``load_scene("model.glb")`` (and every command taking a scene) builds a whole scene from the file; a scene TOML's
 ``[[mesh]] file = "model.glb"`` without ``material`` becomes one mesh per primitive instance with the file's
@@ -37,7 +38,7 @@ from ..quantities import MAX_MAGNITUDE
 from .meshdata import MeshData
 
 #: the file extensions that carry materials (and so may stand without ``material`` in a scene)
-ASSET_EXTENSIONS = (".gltf", ".glb")
+ASSET_EXTENSIONS = (".gltf", ".glb", ".obj")
 #: lumens per watt of 555 nm light: photometric glTF light units → reflets' radiometric ones
 LUMINOUS_EFFICACY = 683.0
 #: material extensions read into the ``gltf`` material
@@ -68,8 +69,13 @@ def is_asset(path: str | Path) -> bool:
 
 
 def load_asset(path: str | Path) -> Asset:
-    """Read a glTF file's parts, materials, cameras and lights (see the module docstring)."""
+    """Read a glTF file's parts, materials, cameras and lights (see the module docstring); an OBJ file's parts and
+    MTL materials (``reflets.scene.obj_asset``)."""
     path = Path(path).absolute()
+    if path.suffix.lower() == ".obj":
+        from .obj_asset import load_obj_asset
+
+        return load_obj_asset(path)
     gltf = read_gltf(path)
     warnings: list[str] = []
     names = _material_names(gltf)
@@ -271,6 +277,10 @@ def part_mesh(path: str | Path, part: int) -> MeshData:
     the uv layout: ``compute_tangents``), its TEXCOORD_0 (v flipped to reflets' v up)."""
     from .meshfile import _unit, compute_tangents, spherical_uv
 
+    if Path(path).suffix.lower() == ".obj":
+        from .obj_asset import obj_part_mesh
+
+        return obj_part_mesh(Path(path), part)
     gltf = read_gltf(path)
     instances = gltf.instances
     if not 0 <= part < len(instances):

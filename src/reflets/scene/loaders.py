@@ -18,9 +18,10 @@ from .model import EnvironmentLight, FileMesh, HeightFieldMesh, Scene
 def load_scene(path: str | Path, camera: int | str | None = None, environment: str | Path | None = None) -> Scene:
     """Read and validate a TOML scene file; relative paths inside it are relative to its folder.
 
-    A glTF file (.gltf, .glb) is a whole scene too (``reflets.scene.assets``): ``camera`` picks one of its
-    cameras (index or name; default the first, else one framing its bounding box), ``environment`` an HDR map
-    lighting it (default: its own lights, else the studio map shipped with reflets)."""
+    A glTF file (.gltf, .glb) or an OBJ file with its MTL materials is a whole scene too
+    (``reflets.scene.assets``): ``camera`` picks one of its cameras (index or name; default the first, else one
+    framing its bounding box), ``environment`` an HDR map lighting it (default: its own lights, else the studio
+    map shipped with reflets)."""
     from .assets import is_asset
 
     path = Path(path)
@@ -29,7 +30,7 @@ def load_scene(path: str | Path, camera: int | str | None = None, environment: s
     if camera is not None or environment is not None:
         from ..errors import ArgumentError
 
-        raise ArgumentError("--camera and --environment apply to a glTF file, not to a scene file", file=path)
+        raise ArgumentError("--camera and --environment apply to a glTF or OBJ file, not to a scene file", file=path)
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -104,7 +105,7 @@ def _expand_file_meshes(scene: Scene, source) -> Scene:
         path = scene.resolve(mesh.file)
         if not is_asset(path):
             raise SceneError(f"mesh[{i}].material: required for a {path.suffix or 'extensionless'} file (only glTF "
-                             "files carry their own materials)", file=source)  # fmt: skip
+                             "and OBJ files carry their own materials)", file=source)  # fmt: skip
         try:
             asset = load_asset(path)
         except SceneError as exc:
@@ -124,7 +125,7 @@ def _expand_file_meshes(scene: Scene, source) -> Scene:
 
 def scene_from_asset(path: str | Path, camera: int | str | None = None, environment: str | Path | None = None,
                      ) -> Scene:  # fmt: skip
-    """A whole scene from a glTF file (see :func:`load_scene`)."""
+    """A whole scene from a glTF or OBJ file (see :func:`load_scene`)."""
     from ..errors import ArgumentError
     from .assets import default_environment, load_asset
 

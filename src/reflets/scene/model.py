@@ -104,16 +104,16 @@ class MeshBase(Strict):
 class FileMesh(MeshBase):
     """A mesh read from OBJ / PLY / glTF / GLB / STL / OFF (path relative to the scene file).
 
-    A glTF file without ``material`` stands for its whole scene with its own materials: the loader expands it into
-    one mesh per primitive instance (``part``), the file's node transforms baked in, ``transform`` on top. With a
-    ``material``, every triangle of the file is one mesh of that material."""
+    A glTF or OBJ file without ``material`` stands for its whole scene with its own materials: the loader expands it
+    into one mesh per primitive instance (``part``; an OBJ's: per material), the file's node transforms baked in,
+    ``transform`` on top. With a ``material``, every triangle of the file is one mesh of that material."""
 
     file: Path
     material: str | None = Field(
-        None, description="the material of every triangle (required unless the file is a glTF file: its own)"
+        None, description="the material of every triangle (required unless the file is a glTF or OBJ file: its own)"
     )
     part: Annotated[int, Field(ge=0)] | None = Field(
-        None, description="one primitive instance of a glTF file (the loader sets it when it expands the file)"
+        None, description="a glTF file's primitive instance or an OBJ file's faces of one material (set by the loader)"
     )
 
 
@@ -383,7 +383,7 @@ class Scene(Strict):
     def _references(self) -> Scene:
         for i, m in enumerate(self.mesh):
             if m.material is None:
-                continue  # a glTF file standing for its own meshes and materials (expanded by the loader)
+                continue  # a glTF / OBJ file standing for its own meshes and materials (expanded by the loader)
             if m.material not in self.materials:
                 known = ", ".join(sorted(self.materials)) or "none defined"
                 raise ValueError(f"mesh[{i}].material: unknown material '{m.material}'; defined materials: {known}")
