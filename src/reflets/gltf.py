@@ -106,6 +106,18 @@ def material_to_gltf(name: str, material) -> tuple[dict, list[str]]:
     return gltf, notes
 
 
+def _gltf_camera(g, cam):
+    """The scene camera as a glTF camera (orthographic: xmag / ymag are half the view window's width / height)."""
+    if cam.orthographic:
+        ymag = cam.ortho_height / 2.0
+        xmag = ymag * cam.size[0] / cam.size[1] / cam.pixel_aspect
+        zfar = cam.far if cam.far is not None else 1e6
+        return g.Camera(type="orthographic", orthographic=g.Orthographic(xmag=xmag, ymag=ymag, znear=cam.near or 0.0,
+                                                                          zfar=zfar))  # fmt: skip
+    perspective = g.Perspective(yfov=math.radians(cam.fov_y), aspectRatio=cam.size[0] / cam.size[1], znear=0.01)
+    return g.Camera(type="perspective", perspective=perspective)
+
+
 def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
     """Write ``scene`` as a .glb; returns the path and the approximations made (one line each)."""
     import pygltflib as g
@@ -200,14 +212,7 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
         accessors=accessors,
         bufferViews=views,
         buffers=[g.Buffer(byteLength=len(blob))],
-        cameras=[
-            g.Camera(
-                type="perspective",
-                perspective=g.Perspective(
-                    yfov=math.radians(cam.fov_y), aspectRatio=cam.size[0] / cam.size[1], znear=0.01
-                ),
-            )
-        ],  # fmt: skip
+        cameras=[_gltf_camera(g, cam)],
         extensionsUsed=used,
         extensions={LIGHTS: {"lights": lights}} if lights else {},
     )

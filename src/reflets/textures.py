@@ -6,9 +6,10 @@ emission) is sRGB-encoded and linearised, data (metallic-roughness, normals, occ
 
 Both renderers read the same decoded texels:
 
-- the GPU gets an 8-bit texture (``SRGB8_ALPHA8`` for colour, so the sampler linearises before filtering;
-  ``RGBA8`` for data) with a full mip chain built here in linear float (a box filter; the driver's own mipmap
-  generation is not guaranteed gamma-correct for sRGB formats), trilinear and 16× anisotropic filtering, and
+- the GPU gets ``SRGB8_ALPHA8`` for colour (the sampler linearises before filtering) and float16 for data
+  (normals, roughness: 8-bit filtering would tilt a normal by up to 1/255), with a full mip chain built here in
+  linear float (a box filter; the driver's own mipmap generation is not guaranteed gamma-correct for sRGB
+  formats), trilinear and 16× anisotropic filtering, and
   the wrap modes of the file's sampler; one texture per content and role, shared by every object and renderer
   of a GL context (``texture_for``);
 - the NumPy reference samples level 0 bilinearly with the same wrap modes (``TextureData.sample``): a
@@ -139,23 +140,36 @@ class TextureData:
         bottom = t[yb, xa] * (1 - fx) + t[yb, xb] * fx
         return (top * (1 - fy) + bottom * fy).astype(np.float64)
 
-    def mip_chain(self) -> list[np.ndarray]:
-        """uint8 (h, w, 4) levels down to 1×1, each the box mean of the one above in linear values (2×2 texels; an
-        odd side's last three rows / columns merge into one), re-encoded like level 0."""
-        levels = [self.codes]
+    def mip_chain(self, normal_map: bool = False) -> list[np.ndarray]:
+        """The GPU's levels down to 1×1, each the box mean of the one above in linear values (2×2 texels; an odd
+        side's last three rows / columns merge into one): colour re-encoded as sRGB uint8 (h, w, 4); data as
+        float16, so that neither the mips nor the sampler's bilinear weights quantise a normal to 8 bits.
+
+        ``normal_map``: the level-0 vectors (2 c − 1) are made unit first, so that a level's mean vector is
+        shorter than 1 by how much the normals under it vary (Toksvig 2005: the GLSL widens the lobe by it)."""
         linear = self.texels
+        if normal_map:
+            vectors = linear[..., :3] * 2.0 - 1.0
+            length = np.linalg.norm(vectors, axis=-1, keepdims=True)
+            flat = np.array([0.0, 0.0, 1.0], np.float32)
+            unit = np.where(length > 1e-6, vectors / np.maximum(length, 1e-6), flat)
+            linear = np.concatenate([unit * 0.5 + 0.5, linear[..., 3:]], axis=-1)
+        levels = [self.codes if self.srgb else linear.astype(np.float16)]
         while linear.shape[0] > 1 or linear.shape[1] > 1:
             linear = _halve(_halve(linear, 0), 1)
-            encoded = linear.copy()
             if self.srgb:
+                encoded = linear.copy()
                 encoded[..., :3] = linear_to_srgb(np.clip(encoded[..., :3], 0.0, 1.0))
-            levels.append(np.clip(np.rint(encoded * 255.0), 0, 255).astype(np.uint8))
+                levels.append(np.clip(np.rint(encoded * 255.0), 0, 255).astype(np.uint8))
+            else:
+                levels.append(linear.astype(np.float16))
         return levels
 
     @property
     def gpu_bytes(self) -> int:
-        """Bytes of the GPU texture with its mips (4 bytes a texel, 4/3 for the chain)."""
-        return int(self.codes.shape[0] * self.codes.shape[1] * 4 * 4 / 3)
+        """Bytes of the GPU texture with its mips (4 bytes a texel for sRGB colour, 8 for float16 data; 4/3 for the
+        chain)."""
+        return int(self.codes.shape[0] * self.codes.shape[1] * (4 if self.srgb else 8) * 4 / 3)
 
 
 def _wrap(i: np.ndarray, n: int, mode: str) -> np.ndarray:
@@ -255,11 +269,11 @@ def load_texture(ref: TextureRef, role_srgb: bool) -> TextureData:
 
 
 SRGB8_ALPHA8 = 0x8C43
-RGBA8 = 0x8058
 
 
-def texture_for(ctx, data: TextureData):
-    """The GL texture of ``data`` in ``ctx`` (uploaded once per context; its memory checked first)."""
+def texture_for(ctx, data: TextureData, normal_map: bool = False):
+    """The GL texture of ``data`` in ``ctx`` (uploaded once per context; its memory checked first); a normal map's
+    mips from unit vectors (:meth:`TextureData.mip_chain`)."""
     import moderngl
 
     from .gpu import depth
@@ -267,13 +281,18 @@ def texture_for(ctx, data: TextureData):
     from .resources import check
 
     store = context_store(ctx, "material_textures")
-    texture = store.get(data.key)
+    key = data.key + (":normal" if normal_map else "")
+    texture = store.get(key)
     if texture is not None:
         return texture
-    check("texture", data.gpu_bytes, value=f"{data.size[0]}x{data.size[1]}", what="RGBA8 texels and their mips")
-    levels = data.mip_chain()
+    kind = "sRGB8 colour" if data.srgb else "float16 data"
+    check("texture", data.gpu_bytes, value=f"{data.size[0]}x{data.size[1]}", what=f"{kind} texels and their mips")
+    levels = data.mip_chain(normal_map)
     w, h = data.size
-    texture = ctx.texture((w, h), 4, levels[0].tobytes(), internal_format=SRGB8_ALPHA8 if data.srgb else RGBA8)
+    if data.srgb:
+        texture = ctx.texture((w, h), 4, levels[0].tobytes(), internal_format=SRGB8_ALPHA8)
+    else:
+        texture = ctx.texture((w, h), 4, levels[0].tobytes(), dtype="f2")
     texture.build_mipmaps(0, len(levels) - 1)  # allocates the chain; the levels are written next
     for level, codes in enumerate(levels[1:], start=1):
         texture.write(codes.tobytes(), level=level)
@@ -283,5 +302,5 @@ def texture_for(ctx, data: TextureData):
         texture.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         texture.anisotropy = 16.0
     depth.texture_wrap(ctx, texture, data.wrap)
-    store[data.key] = texture
+    store[key] = texture
     return texture

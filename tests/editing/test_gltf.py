@@ -77,3 +77,28 @@ def test_a_ggx_conductor_maps_exactly_and_other_models_are_reported():
 def test_a_wrong_extension_is_a_one_line_error(tmp_path, capsys):
     assert main(["export-gltf", str(scene_path("03_shapes.toml")), "-o", str(tmp_path / "x.gltf")]) == 2
     assert ".glb" in capsys.readouterr().err
+
+
+def test_cameras_export_and_read_back_both_projections(tmp_path):
+    """A scene's camera written to glTF and read back by reflets' own reader: perspective and orthographic."""
+    from reflets.gltf import export_gltf
+
+    base = {
+        "materials": {"m": {"type": "lambert", "albedo": [0.5, 0.5, 0.5]}},
+        "mesh": [{"shape": "sphere", "radius": 0.5, "segments": [16, 8], "material": "m"}],
+        "light": [{"type": "point", "position": [1, 2, 3], "intensity": [5, 5, 5]}],
+    }
+    cameras = [
+        {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov_y": 30, "size": [64, 48]},
+        {"position": [0, 0, 3], "look_at": [0, 0, 0], "size": [64, 48], "projection": "orthographic",
+         "ortho_height": 1.5},
+    ]  # fmt: skip
+    for k, camera in enumerate(cameras):
+        path, _ = export_gltf(reflets.load_dict({**base, "camera": camera}), tmp_path / f"c{k}.glb")
+        back = reflets.load_scene(path).camera
+        assert back.projection == camera.get("projection", "perspective")
+        assert back.size[0] / back.size[1] == pytest.approx(64 / 48, abs=0.01)
+        if back.orthographic:
+            assert back.ortho_height == pytest.approx(1.5)
+        else:
+            assert back.fov_y == pytest.approx(30)

@@ -155,3 +155,25 @@ def test_cli_compare_reads_the_reference_standard_error(tmp_path, minimal_toml, 
     assert main(["compare", str(tmp_path / "g.exr"), str(tmp_path / "r.exr"), "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     assert {"mean_z", "mean_abs_z", "within_3_stderr"} <= set(result)
+
+
+def test_adaptive_rounds_refine_noisy_pixels_without_bias(minimal_scene):
+    """A quad light on the Lambert plane at 4 spp, refined to 2 % relative standard error: the noisy pixels get
+    more samples (and only they), their error shrinks, and the image stays unbiased against the exact formula."""
+    scene = reflets.load_dict({**small(minimal_scene, (32, 24)), "light": [QUAD]})
+    plain = reference(scene, spp=4, progress=False)
+    refined = reference(scene, spp=4, progress=False, adaptive_error=0.02, adaptive_spp=1024)
+    exact, mask = plane_polygon_exact(scene)
+    keep = mask & (refined.stderr[..., 0] > 0)
+    assert plain.pixel_spp is None and refined.pixel_spp.max() > 4 and refined.pixel_spp.min() == 4
+    assert np.all(refined.pixel_spp[plain.stderr.sum(axis=-1) == 0] == 4)  # no variance, no refinement
+    luminance = refined.image @ np.array([0.2126, 0.7152, 0.0722])
+    error = refined.stderr @ np.array([0.2126, 0.7152, 0.0722])
+    converged = refined.pixel_spp < 1024
+    assert np.all(error[keep & converged] <= 0.02 * np.maximum(luminance, luminance.mean())[keep & converged] + 1e-7)
+    z = ((refined.image - exact)[keep] / refined.stderr[keep]).ravel()
+    assert abs(z.mean()) < 0.15 and np.abs(z).max() < 5.0
+    again = reference(scene, spp=4, progress=False, adaptive_error=0.02, adaptive_spp=1024)
+    assert np.array_equal(again.image, refined.image)  # seeded rounds: the same image
+    with pytest.raises(ArgumentError, match="adaptive_error"):
+        reference(scene, spp=4, progress=False, adaptive_error=-1.0)

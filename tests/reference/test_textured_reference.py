@@ -13,16 +13,27 @@ import reflets
 from reflets.bench.assets import asset_error, lit_for_comparison, without_textures
 
 ASSETS = Path(__file__).parents[1] / "data" / "gltf"
-SIZE = (160, 120)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["TextureCoordinateTest", "NormalTangentTest"])
-def test_textured_asset_matches_the_numpy_reference(name):
+@pytest.mark.parametrize(
+    "name, size, spp, reference",
+    [
+        ("TextureCoordinateTest", (160, 120), 16, (16, 0.05)),
+        # roughness-0 metal: the helmet's visor; the reference refines its point-light highlight adaptively, the
+        # GPU widens it by the footprint's normals (specular anti-aliasing): 4 % without, 0.2-0.4 % with
+        ("DamagedHelmet", (320, 240), 16, (16, 0.05)),
+        # a third of it is roughness-0 metal on normal-mapped bumps: point-light glints far below a pixel, which
+        # 16 samples a pixel hit or miss (3.4 %); 64 (8 × 8) resolve them to 1.1 %, and the reference needs 64
+        # samples refined to 2 % to agree with itself within 0.4 % (docs/assets.md)
+        ("NormalTangentTest", (160, 120), 64, (64, 0.02)),
+    ],
+)
+def test_textured_asset_matches_the_numpy_reference(name, size, spp, reference):
     scene = lit_for_comparison(reflets.load_scene(ASSETS / name / f"{name}.glb"))
-    gpu = reflets.render(scene, size=SIZE, spp=16)
-    untextured = reflets.render(without_textures(scene), size=SIZE, spp=16)
+    gpu = reflets.render(scene, size=size, spp=16)
+    untextured = reflets.render(without_textures(scene), size=size, spp=16)
     assert np.mean((gpu - untextured) ** 2) / np.mean(gpu**2) > 0.01  # the textures change the image
-    error = asset_error(scene, SIZE)
+    error = asset_error(scene, size, spp=spp, reference_spp=reference[0], adaptive_error=reference[1])
     assert error["blocks"] > 50
     assert error["relmse"] <= 0.02

@@ -53,6 +53,10 @@ CASES = [
     ("nan light", [(("extensions",), LIGHT), (("nodes", 1, "extensions"), {"KHR_lights_punctual": {"light": 0}})],
      "intensity[0]"),
     ("missing camera", [(("nodes", 1, "camera"), 5)], "cameras[5]"),
+    ("ortho xmag 0", [(("cameras", 0), {"type": "orthographic", "orthographic": {"xmag": 0, "ymag": 1, "zfar": 9,
+                                                                               "znear": 0}})], "orthographic.xmag"),
+    ("ortho ymag nan", [(("cameras", 0), {"type": "orthographic", "orthographic": {"xmag": 1, "ymag": NAN, "zfar": 9,
+                                                                                 "znear": 0}})], "orthographic.ymag"),
     ("glTF 1.0", [(("asset", "version"), "1.0")], "glTF version 1.0"),
     ("required extension", [(("extensionsRequired",), ["EXT_meshopt_compression"])], "EXT_meshopt_compression"),
 ]  # fmt: skip

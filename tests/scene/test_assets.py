@@ -61,10 +61,13 @@ def test_node_transforms_match_trimesh_scene_graph():
     assert not unmatched, f"{len(unmatched)} of 13 parts placed differently from trimesh's graph"
 
 
-def test_cameras_perspective_read_orthographic_warned():
+def test_both_cameras_perspective_and_orthographic():
     scene, said = load(ASSETS / "Cameras" / "Cameras.gltf")
-    assert scene.camera.fov_y == pytest.approx(np.degrees(0.7))
-    assert any("orthographic" in line for line in said)
+    assert scene.camera.fov_y == pytest.approx(np.degrees(0.7)) and not scene.camera.orthographic
+    assert not said
+    ortho, _ = load(ASSETS / "Cameras" / "Cameras.gltf", camera=1)
+    assert ortho.camera.orthographic and ortho.camera.ortho_height == pytest.approx(2.0)  # 2 × ymag
+    assert ortho.camera.position == pytest.approx((0.5, 0.5, 3.0)) and ortho.camera.size == (480, 480)
     with pytest.raises(ArgumentError, match="no camera '5'"):
         reflets.load_scene(ASSETS / "Cameras" / "Cameras.gltf", camera="5")
 

@@ -28,6 +28,7 @@ SUITES: dict[str, str] = {
     "viewer": "reflets.bench.viewer:bench_viewer",
     "editing": "reflets.bench.editing:bench_editing",
     "gltf": "reflets.bench.gltf:bench_gltf",
+    "assets": "reflets.bench.assets:bench_assets",
     "ar": "reflets.bench.ar:bench_ar",
     "ar-loop": "reflets.bench.ar:bench_ar_loop",
     "soak": "reflets.bench.soak:bench_soak",

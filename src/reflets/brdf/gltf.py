@@ -266,7 +266,7 @@ class Gltf(Material):
         for field, sampler, _, _ in SLOTS:
             data = self.texture_data(field)
             if data is not None:
-                out[sampler] = texture_for(ctx, data)
+                out[sampler] = texture_for(ctx, data, normal_map=field == "normal_texture")
         return out
 
 

@@ -30,6 +30,8 @@ def reference(
     heuristic: Literal["power", "balance"] = "power",
     progress: bool = True,
     workers: int = 1,
+    adaptive_error: float | None = None,
+    adaptive_spp: int = 16384,
 ) -> ReferenceResult:
     """Render a ground-truth image of ``scene`` (direct lighting only, like every reflets technique; the
     volumetric engine: all orders of scattering inside a translucent medium).
@@ -46,6 +48,9 @@ def reference(
     visibility : shadows on (ray-cast occlusion) or off (the area-light document's unoccluded setting)
     pixel : "center" samples the pixel centre like the GPU renderer; "box" averages over the pixel
     heuristic : MIS weights, "power" (β = 2) or "balance"
+    adaptive_error, adaptive_spp : (numpy engine) pixels whose relative standard error exceeds ``adaptive_error``
+        re-rendered alone with 4× the samples, round after round, up to ``adaptive_spp`` (unbiased: see
+        reflets.reference.montecarlo); ``result.pixel_spp`` tells how many samples each pixel got
     """
     from ..arguments import as_scene, check_size
 
@@ -55,7 +60,8 @@ def reference(
         raise ArgumentError(f"workers must be at least 1 (got {workers})", field="workers")
     if engine == "numpy":
         return MonteCarloReference(scene, visibility=visibility, heuristic=heuristic).render(
-            spp, seed=seed, size=size, pixel=pixel, progress=progress
+            spp, seed=seed, size=size, pixel=pixel, progress=progress, adaptive_error=adaptive_error,
+            adaptive_spp=adaptive_spp,
         )
     if engine == "mitsuba":
         if not visibility:

@@ -180,7 +180,7 @@ class MirrorBounce:
                 continue
             rows = idx[sel]
             d = dirs[rows]
-            o = np.broadcast_to(origin, d.shape)
+            o = origin[rows] if np.ndim(origin) == 2 else np.broadcast_to(origin, d.shape)  # per ray: orthographic
             if isinstance(surface, ParametricReflector):
                 uv = ref.geometry.uv(hits.prim[rows], hits.u[rows], hits.v[rows])
                 x, n = surface.refine(o, d, hits.t[rows], uv)

@@ -427,6 +427,9 @@ def to_mitsuba_dict(
         alpha = background == "alpha"
 
     cam = scene.camera
+    if cam.orthographic:
+        raise SceneError("the Mitsuba bridge renders perspective cameras only (use the NumPy reference)",
+                         field="camera.projection")  # fmt: skip
     if cam.pixel_aspect != 1.0:
         raise SceneError("Mitsuba 3's perspective camera has square pixels only", field="camera.pixel_aspect")
     point_sets = _scene_point_sets(scene, positions)

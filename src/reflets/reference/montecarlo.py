@@ -16,10 +16,17 @@ never blocked, BRDF samples test only the emitters, the environment is always se
 ``shadows = false`` is traced that way alone.
 ``pixel="center"`` traces every sample through the pixel centre — exactly what the GPU renderer samples —
 while ``pixel="box"`` jitters it over the pixel (what Mitsuba's box filter integrates).
+
+``adaptive_error=e`` refines the pixels a fixed sample count leaves noisy (a point light's sub-pixel highlight in
+a near-mirror texel): each round, the pixels whose relative standard error (luminance, relative to the pixel or
+to the image's mean luminance when brighter) exceeds ``e`` are rendered again with 4× the samples, up to
+``adaptive_spp``, from new random streams — and take that round's estimate alone. The selection depends only on
+earlier, independent samples, so every estimate stays unbiased.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 from typing import Literal
@@ -28,7 +35,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..resources import check, fitting_size
-from ..scene.camera import camera_basis, local_directions
+from ..scene.camera import camera_rays
 from ..scene.environment import load_environment
 from ..scene.lightmask import load_masks
 from ..scene.model import DirectionalLight, PointLight, Scene
@@ -53,11 +60,13 @@ class ReferenceResult:
     spp: int
     seconds: float
     engine: str = "numpy"
+    pixel_spp: np.ndarray | None = None  # (H, W) samples behind each pixel when adaptive rounds refined some
 
     @property
     def samples_per_second(self) -> float:
         h, w, _ = self.image.shape
-        return h * w * self.spp / max(self.seconds, 1e-9)
+        samples = h * w * self.spp if self.pixel_spp is None else float(self.pixel_spp.sum())
+        return samples / max(self.seconds, 1e-9)
 
 
 def _mis(p_this: np.ndarray, p_other: np.ndarray, heuristic: str) -> np.ndarray:
@@ -104,6 +113,8 @@ class MonteCarloReference:
         size: tuple[int, int] | None = None,
         pixel: Literal["center", "box"] = "center",
         progress: bool = True,
+        adaptive_error: float | None = None,
+        adaptive_spp: int = 16384,
     ) -> ReferenceResult:
         if spp < 1:
             raise ArgumentError(f"must be ≥ 1, got {spp}", field="spp")
@@ -120,31 +131,55 @@ class MonteCarloReference:
                 width, height, REFERENCE_BYTES_PER_PIXEL, max(budget - REFERENCE_CHUNK_BYTES, 0)
             ),
         )
-        chunk = max(1, RAYS_PER_CHUNK // spp)
         mean = np.zeros((n_pixels, 3))
         err = np.zeros((n_pixels, 3))
         start = time.perf_counter()
-        starts = range(0, n_pixels, chunk)
-        bar = _progress(progress, len(starts))
-        for index, first in enumerate(starts):
-            ids = np.arange(first, min(first + chunk, n_pixels))
-            rng = np.random.default_rng([seed, index])
-            values = self._pixels(ids, width, height, spp, rng, pixel)  # (P, spp, 3)
-            mean[ids] = values.mean(axis=1)
-            if spp > 1:
-                std = values.std(axis=1, ddof=1)
-                std[std <= 1e-9 * np.abs(mean[ids])] = 0.0  # rounding noise of a deterministic value
-                err[ids] = std / np.sqrt(spp)
-            bar.advance()
-        bar.close()
+        self._estimate(np.arange(n_pixels), spp, (seed,), mean, err, width, height, pixel, progress)
+        counts = np.full(n_pixels, spp)
+        if adaptive_error is not None:
+            self._refine(mean, err, counts, adaptive_error, adaptive_spp, seed, width, height, pixel)
         seconds = time.perf_counter() - start
         return ReferenceResult(
             image=mean.reshape(height, width, 3).astype(np.float32),
             stderr=err.reshape(height, width, 3).astype(np.float32),
             spp=spp,
             seconds=seconds,
+            pixel_spp=counts.reshape(height, width) if adaptive_error is not None else None,
         )
 
+    def _estimate(self, pixels, spp, stream, mean, err, width, height, pixel, progress=False) -> None:
+        """Mean and standard error of ``spp`` samples at each of ``pixels`` (flat indices), in chunks whose random
+        streams are seeded by ``stream`` + (chunk index,)."""
+        chunk = max(1, RAYS_PER_CHUNK // spp)
+        starts = range(0, len(pixels), chunk)
+        bar = _progress(progress, len(starts))
+        for index, first in enumerate(starts):
+            ids = pixels[first : first + chunk]
+            rng = np.random.default_rng([*stream, index])
+            values = self._pixels(ids, width, height, spp, rng, pixel)  # (P, spp, 3)
+            mean[ids] = values.mean(axis=1)
+            err[ids] = 0.0
+            if spp > 1:
+                std = values.std(axis=1, ddof=1)
+                std[std <= 1e-9 * np.abs(mean[ids])] = 0.0  # rounding noise of a deterministic value
+                err[ids] = std / np.sqrt(spp)
+            bar.advance()
+        bar.close()
+
+    def _refine(self, mean, err, counts, target, max_spp, seed, width, height, pixel) -> None:
+        """Adaptive rounds (module docstring): noisy pixels re-rendered alone with 4× the samples."""
+        if not (math.isfinite(target) and target > 0):
+            raise ArgumentError(f"must be a positive number, got {target}", field="adaptive_error")
+        weights = np.array([0.2126, 0.7152, 0.0722])
+        for round_ in range(1, 64):
+            luminance = mean @ weights
+            scale = np.maximum(np.abs(luminance), max(float(np.mean(np.abs(luminance))), 1e-12))
+            noisy = np.flatnonzero((err @ weights > target * scale) & (counts < max_spp))
+            if noisy.size == 0:
+                return
+            spp = int(min(counts[noisy].max() * 4, max_spp))
+            self._estimate(noisy, spp, (seed, round_, 1), mean, err, width, height, pixel)
+            counts[noisy] = spp
     # --------------------------------------------------------------------------------------- per chunk
     def _pixels(self, ids, width, height, spp, rng, pixel) -> np.ndarray:
         u = _latin_hypercube(rng, len(ids), spp, self.dims).reshape(-1, self.dims)
@@ -174,9 +209,10 @@ class MonteCarloReference:
         return out
 
     def _camera_rays(self, rows: np.ndarray, cols: np.ndarray, width: int, height: int):
+        """One origin (perspective) or one per ray (orthographic), and unit directions."""
         cam = self.scene.camera
-        dirs = local_directions(cam, cols, rows, width, height) @ camera_basis(cam)
-        return np.asarray(cam.position, dtype=np.float64), dirs / np.linalg.norm(dirs, axis=-1, keepdims=True)
+        origins, dirs = camera_rays(cam, cols, rows, width, height)
+        return (origins if cam.orthographic else np.asarray(cam.position, dtype=np.float64)), dirs
 
     def _escaped(self, dirs: np.ndarray) -> np.ndarray:
         if self.env is not None and self.background is None:

@@ -52,7 +52,7 @@ def _digest(description: dict) -> str:
     scene["light"] = [
         {k: v for k, v in light.items() if not (k == "shadows" and v is True)} for light in scene.get("light", [])
     ]
-    if "camera" in scene:  # a calibrated camera's fields, at the pinhole the older references were made with
+    if "camera" in scene:  # a calibrated or orthographic camera's fields, at the pinhole older references had
         scene["camera"] = {k: v for k, v in scene["camera"].items() if (k, v) not in _CENTRED_CAMERA}
     scene["materials"] = {name: _volumetric_material(m) for name, m in scene.get("materials", {}).items()}
     return content_key({**description, "scene": scene}, length=16)
@@ -68,7 +68,8 @@ def _volumetric_material(material: dict) -> dict:
 
 
 #: camera fields at their defaults (added after references were stored: the same image)
-_CENTRED_CAMERA = (("principal_offset", [0.0, 0.0]), ("pixel_aspect", 1.0), ("near", None), ("far", None))
+_CENTRED_CAMERA = (("principal_offset", [0.0, 0.0]), ("pixel_aspect", 1.0), ("near", None), ("far", None),
+                   ("projection", "perspective"), ("ortho_height", None))  # fmt: skip
 
 
 def save(path: Path, image, digest: str, description: dict, seconds: float) -> None:

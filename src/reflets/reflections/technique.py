@@ -260,6 +260,9 @@ class Fermat(Forward):
             raise ArgumentError(
                 "the fermat method needs a mesh with reflector = true (and a mirror material)", field="mesh"
             )
+        if scene.camera.orthographic:  # its reflection paths end at the eye point
+            raise ArgumentError("the fermat method needs a perspective camera (its paths end at the eye)",
+                                field="camera.projection")  # fmt: skip
         splits = iter(self._check_memory(scene))  # k per reflected mesh, emitters last, in the order drawn below
         super().prepare(scene)
         ctx = self.ctx

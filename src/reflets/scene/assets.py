@@ -13,8 +13,8 @@ What becomes what (docs/assets.md has the full table):
 - materials → ``type = "gltf"`` (Appendix B) with their textures (``TextureRef``: the glTF file and the image
   index, the sampler's wrap modes and filter, ``KHR_texture_transform``), ``KHR_materials_emissive_strength``;
   any other material extension → a warning naming it (its base material is rendered);
-- cameras → ``Camera`` (perspective; ``--camera K`` picks one; default the first, else one framing the bounding
-  box); orthographic cameras are skipped with a warning (reflets' camera is a pinhole);
+- cameras → ``Camera`` (perspective, or orthographic with ``ortho_height`` = 2 ymag and the aspect xmag / ymag;
+  ``--camera K`` picks one; default the first, else one framing the bounding box);
 - ``KHR_lights_punctual`` → point / directional lights, photometric units converted to radiometric ones at
   683 lm/W (the luminous efficacy of 555 nm light, as Blender's glTF importer does): W/sr = cd / 683,
   W/m² = lx / 683; spot lights → point lights without their cone (warned); ``range`` is ignored (the
@@ -75,7 +75,8 @@ def load_asset(path: str | Path) -> Asset:
     if path.suffix.lower() == ".obj":
         from .obj_asset import load_obj_asset
 
-        return load_obj_asset(path)
+        parts, materials, warnings = load_obj_asset(path)
+        return Asset(path, parts, materials, [], [], warnings)
     gltf = read_gltf(path)
     warnings: list[str] = []
     names = _material_names(gltf)
@@ -215,27 +216,40 @@ def _cameras(gltf: GltfFile, warnings: list[str]) -> list[dict]:
             raise SceneError(f"nodes[{node_index}].camera: cameras[{node.camera}] does not exist", file=gltf.path)
         camera = cameras[node.camera]
         name = camera.name or node.name or f"camera {node.camera}"
-        if camera.type != "perspective" or camera.perspective is None:
-            warnings.append(f"{gltf.path.name}: camera '{name}' is {camera.type}: skipped (reflets' camera is a "
-                            "pinhole)")  # fmt: skip
-            continue
         position, forward, up = _basis(matrix)
-        p = camera.perspective
-        where = f"cameras[{node.camera}].perspective"
-        if not (isinstance(p.yfov, int | float) and 0.0 < p.yfov < math.pi):
-            raise SceneError(f"{where}.yfov: must be in (0, π) radians, got {p.yfov!r}", file=gltf.path)
-        if p.aspectRatio is not None and not (isinstance(p.aspectRatio, int | float) and 1e-3 < p.aspectRatio < 1e3):
-            raise SceneError(f"{where}.aspectRatio: must be in (0.001, 1000), got {p.aspectRatio!r}", file=gltf.path)
-        fields = {
-            "position": tuple(map(float, position)),
-            "look_at": tuple(map(float, position + forward)),
-            "up": tuple(map(float, up)),
-            "fov_y": float(min(math.degrees(p.yfov), 179.0)),
-            "near": float(p.znear) if p.znear else None,
-            "far": float(p.zfar) if p.zfar else None,
-        }
-        if p.aspectRatio:
-            fields["size"] = (max(1, round(480 * float(p.aspectRatio))), 480)
+        where = f"cameras[{node.camera}]"
+        fields = {"position": tuple(map(float, position)), "look_at": tuple(map(float, position + forward)),
+                  "up": tuple(map(float, up))}  # fmt: skip
+        if camera.type == "orthographic" and camera.orthographic is not None:
+            o = camera.orthographic
+            for key in ("xmag", "ymag"):
+                value = getattr(o, key)
+                if not (isinstance(value, int | float) and 0.0 < abs(value) <= 1e9 and math.isfinite(value)):
+                    raise SceneError(f"{where}.orthographic.{key}: must be a non-zero finite number, got {value!r}",
+                                     file=gltf.path)  # fmt: skip
+            aspect = abs(o.xmag) / abs(o.ymag)
+            if not 1e-3 < aspect < 1e3:
+                raise SceneError(f"{where}.orthographic: xmag / ymag = {aspect:g}, outside (0.001, 1000)",
+                                 file=gltf.path)  # fmt: skip
+            fields |= {"projection": "orthographic", "ortho_height": 2.0 * abs(float(o.ymag)),
+                       "size": (max(1, round(480 * aspect)), 480), "near": float(o.znear) if o.znear else None,
+                       "far": float(o.zfar) if o.zfar else None}  # fmt: skip
+        elif camera.type == "perspective" and camera.perspective is not None:
+            p = camera.perspective
+            where += ".perspective"
+            if not (isinstance(p.yfov, int | float) and 0.0 < p.yfov < math.pi):
+                raise SceneError(f"{where}.yfov: must be in (0, π) radians, got {p.yfov!r}", file=gltf.path)
+            aspect = p.aspectRatio
+            if aspect is not None and not (isinstance(aspect, int | float) and 1e-3 < aspect < 1e3):
+                raise SceneError(f"{where}.aspectRatio: must be in (0.001, 1000), got {aspect!r}", file=gltf.path)
+            fields |= {"fov_y": float(min(math.degrees(p.yfov), 179.0)), "near": float(p.znear) if p.znear else None,
+                       "far": float(p.zfar) if p.zfar else None}  # fmt: skip
+            if p.aspectRatio:
+                fields["size"] = (max(1, round(480 * float(p.aspectRatio))), 480)
+        else:
+            warnings.append(f"{gltf.path.name}: camera '{name}' of type {camera.type!r} without its parameters: "
+                            "skipped")  # fmt: skip
+            continue
         out.append({"name": name, "fields": {k: v for k, v in fields.items() if v is not None}})
     return out
 

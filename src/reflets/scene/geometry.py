@@ -155,9 +155,22 @@ def camera_range(camera, boxes: np.ndarray) -> tuple[float, float | None]:
     """(near, far) of the camera's view: ``camera.near`` / ``camera.far`` where given; else far is infinite (None)
     and near is :data:`NEAR_FRACTION` of the smallest box's diagonal, or half the distance to the nearest box
     if that is less — never derived from the scene's extent, so a 10,000 km ground plane leaves a 10 cm sphere
-    0.5 m away in view."""
+    0.5 m away in view. An orthographic camera's depth is linear: near defaults to 0 (its own plane) and far to
+    just beyond the farthest box corner along the view."""
     far = camera.far
     near = camera.near
+    if getattr(camera, "orthographic", False):
+        near = 0.0 if near is None else near
+        if far is None:
+            boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 2, 3)
+            forward = np.subtract(camera.look_at, camera.position)
+            forward = forward / np.linalg.norm(forward)
+            # the farthest corner of each box: its max or min coordinate along each axis, by forward's sign
+            farthest = np.where(forward > 0, boxes[:, 1], boxes[:, 0])
+            depth = float(((farthest - np.asarray(camera.position, np.float64)) @ forward).max()) if len(boxes) else 1.0
+            extent = float(np.ptp(boxes.reshape(-1, 3), axis=0).max()) if len(boxes) else 1.0
+            far = max(depth, near) + 0.01 * max(extent, 1e-6) + 1e-6
+        return float(near), float(far)
     if near is None:
         boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 2, 3)
         eye = np.asarray(camera.position, dtype=np.float64)

@@ -29,12 +29,18 @@ class Strict(BaseModel):
 
 
 class Camera(Strict):
-    """Pinhole camera. ``fov_y`` is the full vertical field of view in degrees (Mitsuba, OpenGL)."""
+    """Pinhole camera. ``fov_y`` is the full vertical field of view in degrees (Mitsuba, OpenGL); with
+    ``projection = "orthographic"``, parallel rays along the view direction over a window ``ortho_height`` scene
+    units high (a glTF orthographic camera's 2 × ymag), centred on the camera's axis."""
 
     position: Vec3
     look_at: Vec3
     up: Vec3 = (0.0, 1.0, 0.0)
     fov_y: Annotated[float, Field(gt=0, lt=180, allow_inf_nan=False)] = 45.0
+    projection: Literal["perspective", "orthographic"] = "perspective"
+    ortho_height: Annotated[float, Field(gt=0, le=1e9, allow_inf_nan=False)] | None = Field(
+        None, description="orthographic: the view window's full height in scene units (required there)"
+    )
     principal_offset: tuple[Annotated[float, Field(ge=-1, le=1, allow_inf_nan=False)], ...] = Field(
         (0.0, 0.0),
         min_length=2,
@@ -60,6 +66,8 @@ class Camera(Strict):
 
     @model_validator(mode="after")
     def _non_degenerate(self) -> Camera:
+        if self.projection == "orthographic" and self.ortho_height is None:
+            raise ValueError("ortho_height: required by an orthographic camera (the view window's height)")
         if self.near is not None and self.far is not None and not self.near < self.far:
             raise ValueError(f"near ({self.near:g}) must be less than far ({self.far:g})")
         forward = np.subtract(self.look_at, self.position)
@@ -70,6 +78,10 @@ class Camera(Strict):
         ):
             raise ValueError("up is parallel to the view direction (or zero); choose another up vector")
         return self
+
+    @property
+    def orthographic(self) -> bool:
+        return self.projection == "orthographic"
 
     @property
     def width(self) -> int:

@@ -89,9 +89,8 @@ def obj_parts(path: Path):
     return _parts(path.absolute(), stat.st_size, stat.st_mtime_ns)
 
 
-def load_obj_asset(path: Path):
-    """The OBJ file's parts and MTL materials (module docstring) as an :class:`~reflets.scene.assets.Asset`."""
-    from .assets import Asset
+def load_obj_asset(path: Path) -> tuple[list[dict], dict[str, dict], list[str]]:
+    """The OBJ file's parts (FileMesh dicts), MTL materials (module docstring) and warnings (each line once)."""
     from .meshfile import decode_text
 
     warnings: list[str] = []
@@ -115,7 +114,7 @@ def load_obj_asset(path: Path):
         materials.setdefault(name, libraries.get(material, {"type": "gltf", "double_sided": True}))
         parts.append({"file": path, "part": index, "name": f"{path.stem}/{material or 'default'}",
                       "material": name})  # fmt: skip
-    return Asset(path, parts, materials, [], [], list(dict.fromkeys(warnings)))
+    return parts, materials, list(dict.fromkeys(warnings))
 
 
 def parse_mtl(path: Path, warnings: list[str]) -> dict[str, dict]:

@@ -30,7 +30,7 @@ from ..equirect import rotation_y
 from ..errors import ArgumentError
 from ..gpu import FrameTimer, ProgramSpec, depth, get_program, release_objects, set_uniforms
 from ..resources import check, fitting_size, largest_fitting
-from ..scene.camera import projection_matrix
+from ..scene.camera import projection_matrix, view_eye
 from ..scene.emitters import area_light_samples, polygon_normal
 from ..scene.environment import environment_grid
 from ..scene.geometry import camera_range
@@ -439,7 +439,7 @@ class Forward(Technique):
         self.prepared.shadows.bind()
         if self._ibl is not None:
             self._ibl.bind()
-        eye = tuple(float(c) for c in self.scene.camera.position)
+        eye = view_eye(self.scene.camera)
         per_frame = {**self.frame_uniforms(frame, seed), **SHADOW_SAMPLERS, **self._light_uniforms}
         for program, vao, uniforms, material_textures, own_textures, shading in filter(None, self._draws):
             samplers = {}
@@ -489,6 +489,10 @@ class Forward(Technique):
         # near-plane point minus the eye in float32
         to_eye = np.eye(4)
         to_eye[:3, 3] = self.scene.camera.position
+        if self.scene.camera.orthographic:  # every ray looks along the view: a pinhole 1e-6 rad wide shows it
+            cam = self.scene.camera.model_copy(update={"projection": "perspective", "fov_y": 1e-4})
+            width, height = cam.size
+            view_proj = projection_matrix(cam, width, height, 1.0) @ look_at(cam.position, cam.look_at, cam.up)
         uniforms = {
             "u_inv_view_proj": np.linalg.inv(view_proj @ to_eye).T.astype(np.float32).tobytes(),
             "u_env_from_world": rot.astype(np.float32).tobytes(),  # R^T: column-major bytes of row-major R

@@ -14,6 +14,7 @@ from ..errors import ArgumentError
 from ..gpu import GLObjects, ProgramSpec, depth, get_program, set_uniforms
 from ..gpu.programs import shared_constants
 from ..resources import check, largest_fitting
+from ..scene.camera import view_eye
 from ..scene.geometry import bounding_sphere
 from ..scene.model import DirectionalLight, Scene
 from ..scene.transform import look_at, perspective
@@ -274,7 +275,7 @@ class TranslucentShading(MaterialShading):
                 fbo.use()
                 ctx.viewport = (0, 0, *target.size)
                 fbo.clear(0.0, 0.0, 0.0, 0.0, depth=depth.CLEAR)
-                eye = tuple(float(c) for c in self.scene.camera.position)
+                eye = view_eye(self.scene.camera)
                 set_uniforms(get_program(ctx, BACK_FACE_PROGRAM), {"u_view_proj": vp_bytes, "u_eye": eye})
                 for vao in self._back_vaos:
                     vao.render()

@@ -21,6 +21,7 @@ void main() {
     mat3 frame = shading_frame(n, v_tangent);
 #ifdef MATERIAL_SURFACE
     material_surface(v_uv, frame);  // textures into the parameters, the normal map into the frame
+    material_antialias(n);         // sub-pixel highlights widened by the footprint's normals
     if (!material_covered()) discard;
 #endif
     vec3 wo = transpose(frame) * normalize(u_eye - v_position);

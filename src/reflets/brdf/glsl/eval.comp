@@ -1,4 +1,5 @@
 // Provides a compute kernel evaluating the BRDF in slot BRDF on arrays of (wo, wi): the GLSL/NumPy parity check.
+#define COMPUTE_STAGE 1  // no screen derivatives here: material_antialias is left out
 #include BRDF
 
 layout(local_size_x = 64) in;

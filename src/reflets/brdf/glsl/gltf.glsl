@@ -42,6 +42,7 @@ float g_alpha = 1.0;
 float g_coverage = 1.0;
 float g_occlusion = 1.0;
 vec3 g_emission = vec3(0.0);
+float g_normal_variance = 0.0;  // of the normal map under the footprint (Toksvig), added to alpha^2
 
 vec4 gltf_texel(sampler2D map, mat3 to_image, vec2 uv) {
     return texture(map, (to_image * vec3(uv, 1.0)).xy);
@@ -70,11 +71,30 @@ void material_surface(vec2 uv, inout mat3 frame) {
 #endif
 #if BRDF_GLTF_NORMAL_MAP
     vec3 local = gltf_texel(m_normal_map, m_normal_map_uv, uv).xyz * 2.0 - 1.0;
+    // Toksvig: the mips hold means of unit normals; a mean shorter than 1 says how much the normals under this
+    // fragment's footprint vary (the slope variance per axis is about 1 - |mean|): the lobe widens by it
+    float mean_length = clamp(length(local), 1e-3, 1.0);
+    g_normal_variance = 2.0 * (1.0 - mean_length) / mean_length * m_normal_scale * m_normal_scale;
     local.xy *= m_normal_scale;
     float handedness = dot(cross(frame[2], frame[0]), frame[1]) < 0.0 ? -1.0 : 1.0;
     frame = shading_frame(normalize(frame * local), vec4(frame[0], handedness));
 #endif
 }
+
+// Specular anti-aliasing: a pixel averages the lobe over the normals its footprint spans. On a near-mirror
+// (roughness 0: alpha = 1e-3) a point light's highlight is a sub-pixel needle that a few samples per pixel hit or
+// miss, so alpha^2 grows by (1) the screen-space variance of the geometric normal n (Kaplanyan, Hill, Patney &
+// Lefohn 2016, as Filament does it, with its constants: sigma^2 = 0.15, at most 0.2) and (2) the normal map's
+// variance under the footprint (Toksvig, from the mips, material_surface). Screen derivatives of the mapped normal
+// were tried instead of (2): they widen the lobe far too much at the map's discontinuities. Measured against the
+// converged reference (docs/assets.md). Fragment stages only (screen derivatives).
+#ifndef COMPUTE_STAGE
+void material_antialias(vec3 n) {
+    vec3 du = dFdx(n), dv = dFdy(n);
+    float widening = min(2.0 * 0.15 * (dot(du, du) + dot(dv, dv)), 0.2);
+    g_alpha = sqrt(clamp(g_alpha * g_alpha + widening + g_normal_variance, 1e-6, 1.0));
+}
+#endif
 
 vec3 material_emission() { return g_emission; }
 float material_occlusion() { return g_occlusion; }

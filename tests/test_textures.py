@@ -1,0 +1,67 @@
+"""Material textures: decoding by role, the mip chains the GPU gets, the swizzle, what the GPU samples."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from reflets.textures import TextureData, swizzled
+
+
+def _data(srgb: bool, shape=(6, 10)) -> TextureData:
+    codes = np.random.default_rng(2).integers(0, 256, (*shape, 4), dtype=np.uint8)
+    return TextureData(codes, srgb, key="test")
+
+
+def test_data_mips_are_float16_box_means_down_to_one_texel():
+    """Normals and roughness keep their precision on the GPU: float16 levels, each the mean of the one above (an
+    odd side's last three merge), the last one of a power-of-two image the mean of the whole."""
+    data = _data(srgb=False)
+    levels = data.mip_chain()
+    assert all(level.dtype == np.float16 for level in levels)
+    assert [level.shape[:2] for level in levels] == [(6, 10), (3, 5), (1, 2), (1, 1)]
+    square = _data(srgb=False, shape=(4, 8))
+    assert np.allclose(square.mip_chain()[-1][0, 0], square.texels.reshape(-1, 4).mean(axis=0), atol=1e-3)
+    assert np.allclose(levels[0], data.texels, atol=1e-3)
+    assert data.gpu_bytes == int(6 * 10 * 8 * 4 / 3)
+
+
+def test_colour_mips_are_srgb_bytes_averaged_in_linear_values():
+    data = _data(srgb=True, shape=(2, 2))
+    levels = data.mip_chain()
+    assert levels[0] is data.codes and levels[1].dtype == np.uint8
+    mean = data.texels.reshape(-1, 4).mean(axis=0)
+    decoded = TextureData(levels[1], True, key="x").texels[0, 0]
+    assert np.allclose(decoded, mean, atol=2.5 / 255)  # not the mean of the sRGB codes
+    assert data.gpu_bytes == int(2 * 2 * 4 * 4 / 3)
+
+
+def test_swizzle_reads_channels_and_constants():
+    codes = np.arange(2 * 4, dtype=np.uint8).reshape(1, 2, 4)
+    assert swizzled(codes, None) is codes
+    assert swizzled(codes, "1gb0").tolist() == [[[255, 1, 2, 0], [255, 5, 6, 0]]]
+    assert swizzled(codes, "aaar").tolist() == [[[3, 3, 3, 0], [7, 7, 7, 4]]]
+
+
+def test_gpu_samples_a_data_texture_at_float_precision(ctx):
+    """A 2-texel ramp of codes 100 and 101 sampled 30 % of the way: 100.3 / 255 from the float16 texture (an 8-bit
+    texture's filtered value is rounded to 8 bits on llvmpipe: 100 or 101)."""
+    import moderngl
+
+    from reflets.textures import texture_for
+
+    ramp = np.array([[[100, 0, 0, 255], [101, 0, 0, 255]]], np.uint8)
+    data = TextureData(ramp, False, key="ramp", wrap=("clamp", "clamp"))
+    texture = texture_for(ctx, data)
+    texture.use(0)
+    program = ctx.program(
+        vertex_shader="#version 330\nvoid main() { gl_Position = vec4(0.0, 0.0, 0.0, 1.0); gl_PointSize = 1.0; }",
+        fragment_shader="#version 330\nuniform sampler2D t; out vec4 c;\n"
+        "void main() { c = textureLod(t, vec2(0.4, 0.5), 0.0); }",
+    )
+    target = ctx.simple_framebuffer((1, 1), components=4, dtype="f4")
+    target.use()
+    program["t"] = 0
+    vao = ctx.vertex_array(program, [])
+    vao.render(mode=moderngl.POINTS, vertices=1)
+    value = np.frombuffer(target.read(components=4, dtype="f4"), dtype=np.float32)[0]
+    assert abs(value * 255.0 - 100.3) < 0.05, value * 255.0
