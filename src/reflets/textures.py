@@ -249,10 +249,25 @@ def texture_data(codes_source, key_source: bytes, srgb: bool, wrap=("repeat", "r
     return data
 
 
+#: (file, image, size, mtime, decoding) → its decoded texture: a file loaded again (every scene validation: a
+#: viewer's camera move) is neither read nor hashed again while it is unchanged on disk
+_BY_FILE: dict[tuple, TextureData] = {}
+
+
 def load_texture(ref: TextureRef, role_srgb: bool) -> TextureData:
     """The texels of ``ref`` (its path absolute: the scene loader makes it so), decoded for its role."""
     srgb = role_srgb if ref.srgb is None else ref.srgb
     path = Path(ref.texture)
+    try:
+        stat = path.stat()
+    except OSError as exc:
+        raise SceneError(f"cannot read the texture ({exc.strerror or type(exc).__name__})", file=path) from None
+    file_key = (str(path), ref.image, stat.st_size, stat.st_mtime_ns, srgb, tuple(ref.wrap), ref.filter, ref.channels)
+    with _LOCK:
+        known = _BY_FILE.get(file_key)
+        if known is not None and known.key in _DECODED:
+            _DECODED.move_to_end(known.key)
+            return known
     if ref.image is not None:
         from .gltf_file import read_gltf  # an image inside a glTF file
 
@@ -265,7 +280,12 @@ def load_texture(ref: TextureRef, role_srgb: bool) -> TextureData:
             raise SceneError(f"cannot read the texture ({exc.strerror or type(exc).__name__})", file=path) from None
         what = str(path)
     decode = lambda: decode_image_bytes(data, what)  # noqa: E731
-    return texture_data(decode, data, srgb, ref.wrap, ref.filter == "nearest", ref.channels)
+    decoded = texture_data(decode, data, srgb, ref.wrap, ref.filter == "nearest", ref.channels)
+    with _LOCK:
+        _BY_FILE[file_key] = decoded
+        for key in [k for k, v in _BY_FILE.items() if v.key not in _DECODED]:  # evicted: forget its file too
+            del _BY_FILE[key]
+    return decoded
 
 
 SRGB8_ALPHA8 = 0x8C43
@@ -300,7 +320,7 @@ def texture_for(ctx, data: TextureData, normal_map: bool = False):
         texture.filter = (moderngl.NEAREST_MIPMAP_NEAREST, moderngl.NEAREST)
     else:
         texture.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
-        texture.anisotropy = 16.0
+        texture.anisotropy = 16.0  # the renderer's texture_anisotropy sets it when it draws
     depth.texture_wrap(ctx, texture, data.wrap)
     store[key] = texture
     return texture

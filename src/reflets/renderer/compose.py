@@ -47,6 +47,7 @@ from ..techniques.forward import (
     Forward,
     GridSide,
     PassRole,
+    TextureAnisotropy,
     check_target_size,
     samples_per_pixel_side,
     shadow_settings,
@@ -64,8 +65,9 @@ LIGHT_KINDS = ("point", "directional", "quad", "polygon", "environment")
 
 
 class AutoParams(TechniqueParams):
-    """Parameters of ``auto`` (``area_samples``, ``env_grid``, ``environment`` and ``environment_occlusion`` go to
-    every pass, as in ``forward``; the shadow settings to the prepared scene they share)."""
+    """Parameters of ``auto`` (``area_samples``, ``env_grid``, ``environment``, ``environment_occlusion`` and
+    ``texture_anisotropy`` go to every pass, as in ``forward``; the shadow settings to the prepared scene they
+    share)."""
 
     area_method: Literal["ltc", "forward", "brute", "adaptive", "biased", "analytic", "mc"] = Field(
         "ltc", description="how BRDF-library materials (and translucent ones' far field) take quad / polygon lights"
@@ -77,9 +79,8 @@ class AutoParams(TechniqueParams):
     environment: Literal["prefiltered", "grid"] = Field(
         "prefiltered", description="environment lighting: prefiltered split sum or the env_grid lights"
     )
-    environment_occlusion: EnvironmentOcclusion = Field(
-        "checkerboard", description="the environment's shadow lookups: half per pixel (checkerboard) or all of them"
-    )
+    environment_occlusion: EnvironmentOcclusion = "checkerboard"
+    texture_anisotropy: TextureAnisotropy = 16.0
     soft_shadows: Literal["ratio", "pcss"] = Field(
         "ratio", description="area lights' soft shadows: the ratio estimator over sample views, or PCSS"
     )
@@ -198,6 +199,7 @@ class Auto(Technique):
                 env_grid=p.env_grid,
                 environment=p.environment,
                 environment_occlusion=p.environment_occlusion,
+                texture_anisotropy=p.texture_anisotropy,
             )
             technique.role = PassRole(meshes=meshes, clear=k == 0, extras=k == len(plan) - 1, additive=additive)
             technique.shared = self.prepared

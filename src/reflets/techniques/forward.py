@@ -75,7 +75,22 @@ BACKGROUND_PROGRAM = ProgramSpec(
 GridSide = Annotated[int, Field(ge=1, le=1024)]
 #: the prefiltered environment's occlusion: each pixel looks up half the directions and borrows the other half
 #: from its neighbours (shaders/shadows.glsl), or looks up every one
-EnvironmentOcclusion = Literal["checkerboard", "every-pixel"]
+EnvironmentOcclusion = Annotated[
+    Literal["checkerboard", "every-pixel", "none"],
+    Field(
+        description="the environment's shadow lookups: half per pixel (checkerboard), all of them, or none (the "
+        "map unoccluded by the scene, as Filament and three.js light it)"
+    ),
+]
+TextureAnisotropy = Annotated[
+    float,
+    Field(
+        ge=1.0,
+        le=16.0,
+        description="material textures' anisotropic filtering (1: trilinear only, as Filament and three.js leave "
+        "glTF textures; free on GPUs, about a third of a textured frame on llvmpipe)",
+    ),
+]
 CASCADES_HELP = "directional lights: at most n shadow views, cascades over the camera's view and the whole scene's"
 _OUTPUTS = {"radiance": 0, "position": 1, "normal": 2, "uv": 3, "samples": 4}  # samples: the area-light methods
 
@@ -93,9 +108,8 @@ class ForwardParams(TechniqueParams):
     environment: Literal["prefiltered", "grid"] = Field(
         "prefiltered", description="environment lighting: prefiltered split sum (ibl.py) or the env_grid lights"
     )
-    environment_occlusion: EnvironmentOcclusion = Field(
-        "checkerboard", description="the environment's shadow lookups: half per pixel (checkerboard) or all of them"
-    )
+    environment_occlusion: EnvironmentOcclusion = "checkerboard"
+    texture_anisotropy: TextureAnisotropy = 16.0
     output: Literal["radiance", "position", "normal", "uv"] = "radiance"
 
 
@@ -231,7 +245,9 @@ class Forward(Technique):
             "N_ENV": len(env) // 2,
             "SHADOW_VIEWS": shadows.view_count,
             **(self._ibl.flags() if self._ibl is not None else {"ENV_IBL": 0}),
-            "ENV_VIEWS": shadows.environment_views[1] if self._ibl is not None and shadows.environment_views else 0,
+            "ENV_VIEWS": shadows.environment_views[1]
+            if self._ibl is not None and shadows.environment_views and self.params.environment_occlusion != "none"
+            else 0,
             "ENV_FULL": shadows.environment_full,
             "ENV_CHECKERBOARD": int(self.params.environment_occlusion == "checkerboard"),
             **self.extra_light_flags(polygons),
@@ -272,7 +288,11 @@ class Forward(Technique):
         vao = self.mesh_vertex_array(program, index)
         if self._ibl is not None:
             uniforms.update(self._ibl.uniforms(material))
-        return program, vao, uniforms, material.textures(ctx), own_textures, shading
+        textures = material.textures(ctx)
+        for texture in textures.values():  # shared by a context's renderers: the last one prepared sets it
+            if texture.filter[0] == moderngl.LINEAR_MIPMAP_LINEAR:  # the images' (not the split-sum table)
+                texture.anisotropy = self.params.texture_anisotropy
+        return program, vao, uniforms, textures, own_textures, shading
 
     # ------------------------------------------------------------------ how this technique shades
     def material_shadings(self, scene: Scene) -> list[MaterialShading]:
