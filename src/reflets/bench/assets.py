@@ -138,7 +138,7 @@ def _reflets_times(scene: Scene, positions, **params) -> dict:
     return {"prepare_ms": prepare_ms, "frame_ms": frames, "image": first}
 
 
-def _filament_times(scene: Scene, path: Path, positions, image: Path) -> dict:
+def _filament_times(scene: Scene, path: Path, positions, image: Path | None) -> dict:
     """Filament on the same file, camera path, map and point light (reflets.bench.filament, its own process)."""
     try:
         import filly  # noqa: F401
@@ -150,7 +150,7 @@ def _filament_times(scene: Scene, path: Path, positions, image: Path) -> dict:
     job = {
         "asset": str(path), "size": list(scene.camera.size), "fov_y": scene.camera.fov_y,
         "look_at": list(scene.camera.look_at), "positions": [list(p) for p in positions],
-        "environment": str(environment.file), "image": str(image),
+        "environment": str(environment.file), "image": str(image) if image is not None else None,
         "point_light": {"position": list(point.position), "intensity": list(point.intensity)},
     }  # fmt: skip
     with tempfile.TemporaryDirectory() as folder:
@@ -178,9 +178,11 @@ def bench_assets(quick: bool, out_dir) -> tuple[dict, str]:
             matched = _reflets_times(scene, positions, **AS_FILAMENT)
             untextured = _reflets_times(without_textures(scene), positions)
             stem = f"assets_{name}_{size[0]}x{size[1]}"
-            write_image(out_dir / f"{stem}_reflets.png", textured.pop("image"))
-            matched.pop("image"), untextured.pop("image")
-            filament = _filament_times(scene, path, positions, out_dir / f"{stem}_filament.png")
+            shown = size == sizes[0]  # the first orbit frame of each renderer, at the first size: to look at
+            images = [result.pop("image") for result in (textured, matched, untextured)]
+            if shown:
+                write_image(out_dir / f"{stem}_reflets.png", images[0])
+            filament = _filament_times(scene, path, positions, out_dir / f"{stem}_filament.png" if shown else None)
             row = {"asset": name, "size": list(size), "frames": frames}
             results = (("reflets", textured), ("reflets_as_filament", matched), ("reflets_untextured", untextured),
                        ("filament", filament))  # fmt: skip
