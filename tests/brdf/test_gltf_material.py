@@ -87,3 +87,55 @@ def test_gltf_split_sum_table_gives_the_lobe_albedo(rng):
     h = (wo + wi) / np.linalg.norm(wo + wi, axis=1, keepdims=True)
     p = np.mean((1 - np.sum(wo * h, axis=1)) ** 5 * wi[:, 2] * 2)
     assert abs(table[10, 20, 2] - p) < 0.002
+
+
+COATED = [
+    dict(base_color=(0.5, 0.02, 0.01, 1.0), metallic=0.0, roughness=0.44, clearcoat=1.0, clearcoat_roughness=0.03),
+    dict(base_color=(0.9, 0.6, 0.3, 1.0), metallic=1.0, roughness=0.6, clearcoat=0.7, clearcoat_roughness=0.3),
+]
+
+
+def clearcoat_extension(params, wo, wi):
+    """KHR_materials_clearcoat as its text writes it (coat normal = n): mix(base, coat_brdf, c · F_c(v·n))."""
+    base = appendix_b(params["base_color"], params["metallic"], params["roughness"], wo, wi)
+    coat = appendix_b((1.0, 1.0, 1.0, 1.0), 1.0, params["clearcoat_roughness"], wo, wi)  # a white metal: D V
+    weight = (params["clearcoat"] * (0.04 + 0.96 * (1 - wo[:, 2]) ** 5))[:, None]
+    return (1 - weight) * base + weight * coat
+
+
+@pytest.mark.parametrize("params", COATED)
+def test_clearcoat_equals_the_extensions_formula(params, rng):
+    wo, wi = upper_hemisphere(rng, 4000), upper_hemisphere(rng, 4000)
+    assert np.allclose(Gltf(**params).eval(wo, wi), clearcoat_extension(params, wo, wi), rtol=1e-9, atol=1e-12)
+    bare = {k: v for k, v in params.items() if not k.startswith("clearcoat")}
+    assert not np.allclose(Gltf(**params).eval(wo, wi), Gltf(**bare).eval(wo, wi))
+
+
+#: ClearCoatTest's coat roughness 0.03 (α = 1e-3) is a spike that uniform sampling misses and float32 holds to
+#: 1.6e-3 only: the sampling and GPU checks take the same coat at roughness 0.15
+CHECKED = [COATED[1], {**COATED[0], "clearcoat_roughness": 0.15}]
+
+
+@pytest.mark.parametrize("params", CHECKED)
+def test_clearcoat_standard_checks(params, rng):
+    run_standard_checks(Gltf(**params), rng)
+
+
+@pytest.mark.parametrize("params", CHECKED)
+def test_clearcoat_glsl_matches_numpy(params, ctx, rng):
+    check_glsl_parity(Gltf(**params), ctx, rng)
+
+
+def test_clearcoat_normal_of_its_own_is_lit_by_its_own_cosine(rng):
+    """A coat normal tilted from the shading normal (a coat normal map): its lobe peaks at the coat's mirror
+    direction, and times the base's cosine it is D V (n_c·l), as Khronos' sample viewer lights it."""
+    from reflets.brdf.gltf import GltfPoints
+
+    tilt = np.array([np.sin(0.3), 0.0, np.cos(0.3)])
+    points = GltfPoints(base=np.zeros((1, 3)), metallic=np.ones(1), alpha=np.ones(1), coat=np.ones(1),
+                        coat_alpha=np.full(1, 0.05), coat_normal=tilt[None])  # fmt: skip
+    wo = np.array([[0.0, 0.0, 1.0]])
+    mirror = 2 * tilt[2] * tilt - wo[0]
+    at_mirror = points.eval(wo, mirror[None])[0, 0] * mirror[2]
+    at_z = points.eval(wo, wo)[0, 0] * wo[0, 2]
+    assert at_mirror > 50 * at_z

@@ -1,6 +1,7 @@
 """Real assets against ground truth: the GPU renderer and the NumPy reference read the same textures (base colour,
-metallic-roughness, normal map, emission) and must agree (issue 28's acceptance: relative MSE ≤ 2 % on 4×4-block
-means over the asset's pixels, point + directional light with shadows; reflets.bench.assets)."""
+metallic-roughness, normal map, emission, clear coat) and must agree (issue 28's acceptance: relative MSE ≤ 2 % on
+4×4-block means over the asset's pixels, ≤ 5 % with a clear coat, point + directional light with shadows;
+reflets.bench.assets)."""
 
 from __future__ import annotations
 
@@ -17,23 +18,30 @@ ASSETS = Path(__file__).parents[1] / "data" / "gltf"
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    "name, size, spp, reference",
+    "name, size, spp, reference, bound",
     [
-        ("TextureCoordinateTest", (160, 120), 16, (16, 0.05)),
+        ("TextureCoordinateTest", (160, 120), 16, (16, 0.05), 0.02),
         # roughness-0 metal: the helmet's visor; the reference refines its point-light highlight adaptively, the
         # GPU widens it by the footprint's normals (specular anti-aliasing): 4 % without, 0.2-0.4 % with
-        ("DamagedHelmet", (320, 240), 16, (16, 0.05)),
+        ("DamagedHelmet", (320, 240), 16, (16, 0.05), 0.02),
         # a third of it is roughness-0 metal on normal-mapped bumps: point-light glints far below a pixel, which
         # 16 samples a pixel hit or miss (3.4 %); 64 (8 × 8) resolve them to 1.1 %, and the reference needs 64
         # samples refined to 2 % to agree with itself within 0.4 % (docs/assets.md)
-        ("NormalTangentTest", (160, 120), 64, (64, 0.02)),
+        ("NormalTangentTest", (160, 120), 64, (64, 0.02), 0.02),
+        # KHR_materials_clearcoat: factors, coat and coat-roughness textures, a coat normal map (issue 28: ≤ 5 %);
+        # measured 1.9 % (1.3 % against a reference of 64 samples refined to 2 %)
+        ("ClearCoatTest", (160, 120), 16, (16, 0.05), 0.05),
     ],
 )
-def test_textured_asset_matches_the_numpy_reference(name, size, spp, reference):
+def test_textured_asset_matches_the_numpy_reference(name, size, spp, reference, bound):
     scene = lit_for_comparison(reflets.load_scene(ASSETS / name / f"{name}.glb"))
     gpu = reflets.render(scene, size=size, spp=16)
     untextured = reflets.render(without_textures(scene), size=size, spp=16)
     assert np.mean((gpu - untextured) ** 2) / np.mean(gpu**2) > 0.01  # the textures change the image
     error = asset_error(scene, size, spp=spp, reference_spp=reference[0], adaptive_error=reference[1])
+    if name == "ClearCoatTest":  # the coats change the image
+        bare = {k: m.model_copy(update={"clearcoat": 0.0}) for k, m in scene.materials.items()}
+        uncoated = reflets.render(scene.model_copy(update={"materials": bare}), size=size, spp=16)
+        assert np.mean((gpu - uncoated) ** 2) / np.mean(gpu**2) > 1e-3  # measured 5e-3: small sharp highlights
     assert error["blocks"] > 50
-    assert error["relmse"] <= 0.02
+    assert error["relmse"] <= bound

@@ -136,9 +136,11 @@ class Material(BaseModel):
     #: the GLSL twin gives the split sum's albedos per fragment (``material_ibl``): no albedo curve is computed
     fragment_ibl: ClassVar[bool] = False
 
-    def at(self, uv: np.ndarray):
+    def at(self, uv: np.ndarray, frames: tuple[np.ndarray, np.ndarray] | None = None):
         """What evaluates the BRDF at N surface points of mesh uv (N, 2): ``eval`` / ``sample`` / ``pdf`` over (N, 3)
-        directions, one per point. Constant parameters: the material itself."""
+        directions, one per point, in the shading frame. ``frames``: the points' geometric frames and their shading
+        frames (:meth:`shading_frame`'s), for a layer with a normal of its own (glTF's clear coat). Constant
+        parameters: the material itself."""
         return self
 
     def shading_frame(self, frame: np.ndarray, uv: np.ndarray) -> np.ndarray:

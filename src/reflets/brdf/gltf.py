@@ -13,6 +13,17 @@ factor as glTF does: base colour (sRGB, alpha in A), metallic (B) and roughness 
 texture, a tangent-space normal map (scaled by ``normal_scale`` in x and y), occlusion (R; only the environment's
 light is occluded, as glTF defines it) and emission (sRGB) × ``emissive_strength``.
 
+KHR_materials_clearcoat layers a second GGX lobe on top, as the extension defines it:
+
+    f_coated = (1 − c F_c) f + c F_c · D_c V_c · (n_c·l) / (n·l)
+
+with c = ``clearcoat`` (× R of ``clearcoat_texture``), α_c = ``clearcoat_roughness``² (× G of its texture),
+F_c = 0.04 + 0.96 (1 − |v·n_c|)⁵ and n_c the coat's normal: the geometric normal, or its own normal map
+(``clearcoat_normal_texture``; the base's normal map does not bend the coat). The coat lobe is lit with its own
+cosine (n_c·l), like Khronos' sample viewer; the renderers multiply f by the base's n·l, hence the ratio. The
+layering weighs the base by 1 − c F_c at the view direction only: a coated material is not reciprocal (the
+extension's, like Appendix B's energy excess).
+
 Both renderers evaluate the textures first into per-point parameters and then the unchanged BRDF: GLSL through
 ``material_surface`` (``glsl/gltf.glsl``), NumPy through :meth:`Gltf.at` (a :class:`GltfPoints` of arrays).
 """
@@ -42,7 +53,12 @@ SLOTS = (
     ("normal_texture", "m_normal_map", False, "BRDF_GLTF_NORMAL_MAP"),
     ("occlusion_texture", "m_occlusion_map", False, "BRDF_GLTF_OCCLUSION_MAP"),
     ("emissive_texture", "m_emissive_map", True, "BRDF_GLTF_EMISSIVE_MAP"),
+    ("clearcoat_texture", "m_clearcoat_map", False, "BRDF_GLTF_COAT_MAP"),
+    ("clearcoat_roughness_texture", "m_clearcoat_roughness_map", False, "BRDF_GLTF_COAT_ROUGHNESS_MAP"),
+    ("clearcoat_normal_texture", "m_clearcoat_normal_map", False, "BRDF_GLTF_COAT_NORMAL_MAP"),
 )
+#: the clear coat's Fresnel reflectance at normal incidence (η = 1.5)
+COAT_F0 = 0.04
 
 Rgba = tuple[Unit, Unit, Unit, Unit]
 
@@ -55,8 +71,35 @@ class GltfPoints:
     base: np.ndarray
     metallic: np.ndarray
     alpha: np.ndarray
+    coat: np.ndarray | None = None  # (N,) clear coat weight; None: no coat
+    coat_alpha: np.ndarray | None = None  # (N,)
+    coat_normal: np.ndarray | None = None  # (N, 3) in the shading frame (unit)
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        value = self._base_eval(wo, wi)
+        if self.coat is None:
+            return value
+        coat_fresnel, lobe = self._coat(wo, wi)
+        weight = (self.coat * coat_fresnel)[..., None]
+        return (1.0 - weight) * value + weight * lobe[..., None]
+
+    def _coat(self, wo: np.ndarray, wi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """F_c at wo and the coat lobe D_c V_c (n_c·l) / (n·l) (zero unless wo, wi are above both surfaces)."""
+        wo, wi = np.asarray(wo, np.float64), np.asarray(wi, np.float64)
+        n = np.broadcast_to(self.coat_normal, wo.shape)
+        a = np.broadcast_to(self.coat_alpha, wo.shape[:-1])
+        nv, nl = np.sum(n * wo, axis=-1), np.sum(n * wi, axis=-1)
+        fresnel = COAT_F0 + (1.0 - COAT_F0) * (1.0 - np.clip(np.abs(nv), 0.0, 1.0)) ** 5
+        up = (nv > 0) & (nl > 0) & (wo[..., 2] > 0) & (wi[..., 2] > 0)
+        nh = np.sum(n * _normalize(wo + wi), axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a2 = a * a
+            d = np.where(nh > 0, a2 / (np.pi * (nh * nh * (a2 - 1.0) + 1.0) ** 2), 0.0)
+            lam = [(np.sqrt(1.0 + a2 * (1.0 - c * c) / (c * c)) - 1.0) / 2.0 for c in (nv, nl)]
+            lobe = d / (1.0 + lam[0] + lam[1]) / (4.0 * nv * nl) * nl / wi[..., 2]
+        return fresnel, np.where(up, np.nan_to_num(lobe), 0.0)
+
+    def _base_eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         wo, wi = np.asarray(wo, np.float64), np.asarray(wi, np.float64)
         up = (wo[..., 2] > 0) & (wi[..., 2] > 0)
         h = _normalize(wo + wi)
@@ -81,8 +124,62 @@ class GltfPoints:
         total = specular + diffuse
         return np.where(total > 0, np.maximum(specular / np.where(total > 0, total, 1.0), 0.1), 1.0)
 
+    def _coat_probability(self, wo: np.ndarray) -> np.ndarray:
+        """The chance of sampling the coat's lobe: its Fresnel weight at wo (at most 0.9; 0 without a coat)."""
+        if self.coat is None:
+            return np.zeros(np.shape(wo)[:-1])
+        nv = np.sum(np.broadcast_to(self.coat_normal, np.shape(wo)) * wo, axis=-1)
+        fresnel = COAT_F0 + (1.0 - COAT_F0) * (1.0 - np.clip(np.abs(nv), 0.0, 1.0)) ** 5
+        return np.clip(self.coat * fresnel, 0.0, 0.9)
+
+    def _coat_frame(self, shape) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        from .base import orthonormal_basis
+
+        n = np.broadcast_to(self.coat_normal, (*shape, 3))
+        t, b = orthonormal_basis(n)
+        return t, b, n
+
     def sample(self, wo: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """A one-sample mixture of cosine-weighted directions and GGX visible normals (Heitz 2018) reflected."""
+        """A one-sample mixture: the coat's GGX visible normals about n_c (with probability ``c F_c``), else the
+        base's cosine-weighted directions and GGX visible normals (Heitz 2018), reflected."""
+        from .base import reflect
+
+        wo = np.asarray(wo, np.float64)
+        u1, u2 = np.asarray(u1, np.float64), np.asarray(u2, np.float64)
+        q = np.broadcast_to(self._coat_probability(wo), u1.shape)
+        if not np.any(q > 0):
+            return self._base_sample(wo, u1, u2)
+        coat = u1 < q
+        u1b = np.clip(np.where(coat, u1 / np.maximum(q, 1e-300), (u1 - q) / np.maximum(1.0 - q, 1e-300)), 0.0,
+                      np.nextafter(1.0, 0.0))  # fmt: skip
+        wi, _ = self._base_sample(wo, u1b, u2)
+        t, b, n = self._coat_frame(u1.shape)
+        local = np.stack([np.sum(wo * t, -1), np.sum(wo * b, -1), np.sum(wo * n, -1)], axis=-1)
+        a = np.broadcast_to(self.coat_alpha, u1.shape)
+        hc = Distribution("ggx", a, a).sample_visible(local, u1b, u2)
+        h = hc[..., :1] * t + hc[..., 1:2] * b + hc[..., 2:3] * n
+        wi = np.where(coat[..., None], reflect(wo, np.nan_to_num(h)), wi)
+        failed = coat & np.isnan(hc[..., 0])
+        wi = np.where(failed[..., None], [0.0, 0.0, -1.0], wi)
+        return wi, np.where(failed, 0.0, self.pdf(wo, wi))
+
+    def pdf(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        wo, wi = np.asarray(wo, np.float64), np.asarray(wi, np.float64)
+        base = self._base_pdf(wo, wi)
+        q = self._coat_probability(wo)
+        if not np.any(q > 0):
+            return base
+        t, b, n = self._coat_frame(wo.shape[:-1])
+        h = _normalize(wo + wi)
+        to_coat = lambda w: np.stack([np.sum(w * t, -1), np.sum(w * b, -1), np.sum(w * n, -1)], axis=-1)  # noqa: E731
+        a = np.broadcast_to(self.coat_alpha, wo.shape[:-1])
+        dot = np.sum(wo * h, axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lobe = np.where(dot > 0, Distribution("ggx", a, a).pdf_visible(to_coat(wo), to_coat(h)) / (4 * dot), 0.0)
+        return (1.0 - q) * base + q * np.nan_to_num(lobe)
+
+    def _base_sample(self, wo: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The base's mixture of cosine-weighted directions and GGX visible normals (Heitz 2018) reflected."""
         from .base import reflect, sample_cosine
 
         wo = np.asarray(wo, np.float64)
@@ -96,9 +193,9 @@ class GltfPoints:
         wi = np.where(lobe[..., None], reflect(wo, np.nan_to_num(h)), sample_cosine(u1s, u2))
         failed = lobe & np.isnan(h[..., 0])
         wi = np.where(failed[..., None], [0.0, 0.0, -1.0], wi)
-        return wi, np.where(failed, 0.0, self.pdf(wo, wi))
+        return wi, np.where(failed, 0.0, self._base_pdf(wo, wi))
 
-    def pdf(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+    def _base_pdf(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         wo, wi = np.asarray(wo, np.float64), np.asarray(wi, np.float64)
         p = self._specular_probability()
         h = _normalize(wo + wi)
@@ -123,6 +220,9 @@ class Gltf(Material):
     normal_texture, normal_scale : tangent-space normal map and its xy scale (default 1).
     occlusion_texture, occlusion_strength : ambient occlusion (R) and its strength in [0, 1] (environment light).
     emissive, emissive_texture, emissive_strength : emitted radiance = emissive × texture × strength.
+    clearcoat, clearcoat_texture : the clear coat's weight (× R; KHR_materials_clearcoat; default 0: none).
+    clearcoat_roughness, clearcoat_roughness_texture : its roughness (× G); α_c = roughness² (at least 1e-3).
+    clearcoat_normal_texture, clearcoat_normal_scale : its own tangent-space normal map (else the geometric normal).
     alpha_mode : "opaque" (default), "mask" (coverage < alpha_cutoff is a hole) or "blend".
     """
 
@@ -142,6 +242,12 @@ class Gltf(Material):
     emissive: RGB = (0.0, 0.0, 0.0)
     emissive_texture: TextureRef | None = None
     emissive_strength: NonNeg = 1.0
+    clearcoat: Unit = 0.0
+    clearcoat_texture: TextureRef | None = None
+    clearcoat_roughness: Unit = 0.0
+    clearcoat_roughness_texture: TextureRef | None = None
+    clearcoat_normal_texture: TextureRef | None = None
+    clearcoat_normal_scale: Annotated[float, Field(ge=-100, le=100, allow_inf_nan=False)] = 1.0
     alpha_mode: Literal["opaque", "mask", "blend"] = "opaque"
     alpha_cutoff: Unit = 0.5
     double_sided: bool = Field(False, description="glTF's flag (reflets shades both sides of every surface)")
@@ -155,9 +261,14 @@ class Gltf(Material):
         return max(self.roughness * self.roughness, MIN_ALPHA)
 
     def constant_points(self, shape: tuple[int, ...] = ()) -> GltfPoints:
-        """The factors alone (no texture), broadcast to ``shape``."""
+        """The factors alone (no texture), broadcast to ``shape`` (the coat's normal: the shading normal)."""
         base = np.broadcast_to(np.asarray(self.base_color[:3], np.float64), (*shape, 3))
-        return GltfPoints(base=base, metallic=np.full(shape, float(self.metallic)), alpha=np.full(shape, self.alpha))
+        points = GltfPoints(base=base, metallic=np.full(shape, float(self.metallic)), alpha=np.full(shape, self.alpha))
+        if self.clearcoat > 0:
+            points.coat = np.full(shape, float(self.clearcoat))
+            points.coat_alpha = np.full(shape, max(self.clearcoat_roughness**2, MIN_ALPHA))
+            points.coat_normal = np.broadcast_to(np.array([0.0, 0.0, 1.0]), (*shape, 3))
+        return points
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         wo, wi = np.broadcast_arrays(np.asarray(wo, np.float64), np.asarray(wi, np.float64))
@@ -170,6 +281,11 @@ class Gltf(Material):
     def pdf(self, wo, wi):
         wo, wi = np.broadcast_arrays(np.asarray(wo, np.float64), np.asarray(wi, np.float64))
         return self.constant_points(wo.shape[:-1]).pdf(wo, wi)
+
+    @property
+    def reciprocal(self) -> bool:
+        """Not with a clear coat: KHR_materials_clearcoat weighs the base by 1 − c F_c at the view direction only."""
+        return self.clearcoat == 0.0
 
     @property
     def energy_conserving(self) -> bool:
@@ -208,8 +324,9 @@ class Gltf(Material):
         image_uv = uv @ m[:2, :2].T + m[:2, 2]
         return data.sample(image_uv)
 
-    def at(self, uv: np.ndarray) -> GltfPoints:
-        """The material at mesh uv (N, 2): textures × factors (the reference's per-hit parameters)."""
+    def at(self, uv: np.ndarray, frames: tuple[np.ndarray, np.ndarray] | None = None) -> GltfPoints:
+        """The material at mesh uv (N, 2): textures × factors (the reference's per-hit parameters); ``frames``
+        (geometric, shading) place the clear coat's normal (without them: the shading normal)."""
         n = len(uv)
         points = self.constant_points((n,))
         base = np.array(points.base)
@@ -220,7 +337,32 @@ class Gltf(Material):
         texels = self._lookup("metallic_roughness_texture", uv)
         if texels is not None:
             metallic, roughness = metallic * texels[:, 2], roughness * texels[:, 1]
-        return GltfPoints(base=base, metallic=metallic, alpha=np.maximum(roughness * roughness, MIN_ALPHA))
+        points = GltfPoints(base=base, metallic=metallic, alpha=np.maximum(roughness * roughness, MIN_ALPHA))
+        if self.clearcoat > 0:
+            self._coat_at(points, uv, frames)
+        return points
+
+    def _coat_at(self, points: GltfPoints, uv: np.ndarray, frames) -> None:
+        n = len(uv)
+        coat, roughness = np.full(n, float(self.clearcoat)), np.full(n, float(self.clearcoat_roughness))
+        texels = self._lookup("clearcoat_texture", uv)
+        if texels is not None:
+            coat = coat * texels[:, 0]
+        texels = self._lookup("clearcoat_roughness_texture", uv)
+        if texels is not None:
+            roughness = roughness * texels[:, 1]
+        normal = np.broadcast_to(np.array([0.0, 0.0, 1.0]), (n, 3))
+        if frames is not None:  # the geometric normal, or the coat's own normal map on the geometric frame
+            geometric, shading = frames
+            world = geometric[..., 2]
+            texels = self._lookup("clearcoat_normal_texture", uv)
+            if texels is not None:
+                local = texels[:, :3] * 2.0 - 1.0
+                local[:, :2] *= self.clearcoat_normal_scale
+                world = perturbed_frame(geometric, local)[..., 2]
+            normal = _normalize(np.einsum("nji,nj->ni", shading, world))  # into the shading frame
+        points.coat, points.coat_alpha = coat, np.maximum(roughness * roughness, MIN_ALPHA)
+        points.coat_normal = normal
 
     def emission(self, uv: np.ndarray) -> np.ndarray:
         """Emitted radiance (N, 3) at mesh uv."""
@@ -241,7 +383,8 @@ class Gltf(Material):
 
     def flags(self) -> dict[str, object]:
         return {flag: int(getattr(self, field) is not None) for field, _, _, flag in SLOTS} | {
-            "BRDF_GLTF_MASK": int(self.alpha_mode == "mask")
+            "BRDF_GLTF_MASK": int(self.alpha_mode == "mask"),
+            "BRDF_GLTF_COAT": int(self.clearcoat > 0),
         }
 
     def uniforms(self) -> dict[str, object]:
@@ -252,6 +395,8 @@ class Gltf(Material):
             "m_occlusion_strength": float(self.occlusion_strength),
             "m_emissive": tuple(float(c) * self.emissive_strength for c in self.emissive),
             "m_alpha_cutoff": float(self.alpha_cutoff),
+            "m_clearcoat": (float(self.clearcoat), float(self.clearcoat_roughness)),
+            "m_clearcoat_normal_scale": float(self.clearcoat_normal_scale),
         }
         for field, sampler, _, _ in SLOTS:
             ref = getattr(self, field)
@@ -266,7 +411,7 @@ class Gltf(Material):
         for field, sampler, _, _ in SLOTS:
             data = self.texture_data(field)
             if data is not None:
-                out[sampler] = texture_for(ctx, data, normal_map=field == "normal_texture")
+                out[sampler] = texture_for(ctx, data, normal_map=field.endswith("normal_texture"))
         return out
 
 

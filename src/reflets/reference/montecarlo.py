@@ -338,9 +338,10 @@ class MonteCarloReference:
         for m_index in np.unique(surf.material):
             s = surf.material == m_index
             material = self.materials[m_index]
-            surf.frame[s] = material.shading_frame(surf.frame[s], uv[s])
+            geometric = surf.frame[s]
+            surf.frame[s] = material.shading_frame(geometric, uv[s])
             emitted[s] += material.emission(uv[s])
-            bound[m_index] = (s, material.at(uv[s]))
+            bound[m_index] = (s, material.at(uv[s], (geometric, surf.frame[s])))
         return bound
 
     @staticmethod

@@ -42,7 +42,7 @@ ASSET_EXTENSIONS = (".gltf", ".glb", ".obj")
 #: lumens per watt of 555 nm light: photometric glTF light units → reflets' radiometric ones
 LUMINOUS_EFFICACY = 683.0
 #: material extensions read into the ``gltf`` material
-SUPPORTED_MATERIAL_EXTENSIONS = {"KHR_materials_emissive_strength", "KHR_texture_transform"}
+SUPPORTED_MATERIAL_EXTENSIONS = {"KHR_materials_emissive_strength", "KHR_texture_transform", "KHR_materials_clearcoat"}
 WRAPS = {10497: "repeat", 33071: "clamp", 33648: "mirror"}
 NEAREST_FILTERS = {9728, 9984, 9986}  # NEAREST, NEAREST_MIPMAP_NEAREST, NEAREST_MIPMAP_LINEAR (mag / min)
 
@@ -181,6 +181,9 @@ def _material(gltf: GltfFile, index: int, warnings: list[str]) -> dict:
     extensions = m.extensions or {}
     if "KHR_materials_emissive_strength" in extensions:
         out["emissive_strength"] = float(extensions["KHR_materials_emissive_strength"].get("emissiveStrength", 1.0))
+    if "KHR_materials_clearcoat" in extensions:
+        out |= _clearcoat(gltf, extensions["KHR_materials_clearcoat"], f"{where}.extensions.KHR_materials_clearcoat",
+                          warnings)  # fmt: skip
     mode = (m.alphaMode or "OPAQUE").lower()
     out["alpha_mode"] = mode if mode in ("opaque", "mask", "blend") else "opaque"
     if m.alphaCutoff is not None:
@@ -195,6 +198,36 @@ def _material(gltf: GltfFile, index: int, warnings: list[str]) -> dict:
         warnings.append(f"{gltf.path.name}: material '{name}': {extension} not supported, its base "
                         "metallic-roughness material is rendered")  # fmt: skip
     return {key: value for key, value in out.items() if value is not None}
+
+
+def _clearcoat(gltf: GltfFile, coat, where: str, warnings: list[str]) -> dict:
+    """KHR_materials_clearcoat's factors and textures (raw JSON: its textureInfo objects are dicts)."""
+    from types import SimpleNamespace
+
+    if not isinstance(coat, dict):
+        raise SceneError(f"{where}: must be an object", file=gltf.path)
+
+    def info(key: str):
+        value = coat.get(key)
+        if value is None:
+            return None
+        if not isinstance(value, dict):
+            raise SceneError(f"{where}.{key}: must be a textureInfo object", file=gltf.path)
+        return SimpleNamespace(index=value.get("index"), texCoord=value.get("texCoord"),
+                               extensions=value.get("extensions"), scale=value.get("scale"))  # fmt: skip
+
+    out = {
+        "clearcoat": coat.get("clearcoatFactor", 0.0),
+        "clearcoat_roughness": coat.get("clearcoatRoughnessFactor", 0.0),
+        "clearcoat_texture": _texture(gltf, info("clearcoatTexture"), where + ".clearcoatTexture", warnings),
+        "clearcoat_roughness_texture": _texture(gltf, info("clearcoatRoughnessTexture"),
+                                                where + ".clearcoatRoughnessTexture", warnings),  # fmt: skip
+    }
+    normal = info("clearcoatNormalTexture")
+    if normal is not None:
+        out["clearcoat_normal_texture"] = _texture(gltf, normal, where + ".clearcoatNormalTexture", warnings)
+        out["clearcoat_normal_scale"] = 1.0 if normal.scale is None else normal.scale
+    return out
 
 
 def _basis(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -289,7 +322,7 @@ def part_mesh(path: str | Path, part: int) -> MeshData:
     """One primitive instance of a glTF file in the file's world coordinates, with a full shading frame: the
     file's normals (flat normals when it has none, as the specification requires), its tangents (else built from
     the uv layout: ``compute_tangents``), its TEXCOORD_0 (v flipped to reflets' v up)."""
-    from .meshfile import _unit, compute_tangents, spherical_uv
+    from .meshfile import _unit, shaded_mesh, spherical_uv
 
     if Path(path).suffix.lower() == ".obj":
         from .obj_asset import obj_part_mesh
@@ -318,15 +351,9 @@ def part_mesh(path: str | Path, part: int) -> MeshData:
     mesh_uv = np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=1) if uv is not None else spherical_uv(pos)
     normals, length = _unit(normals)
     normals[length == 0] = (0.0, 1.0, 0.0)
-    if tangents is None or not np.all(np.isfinite(tangents)):
-        tangents = compute_tangents(pos, normals, mesh_uv, faces)
-    local = MeshData(
-        positions=pos.astype(np.float32),
-        normals=normals.astype(np.float32),
-        tangents=np.asarray(tangents, dtype=np.float32),
-        uvs=mesh_uv.astype(np.float32),
-        indices=faces.astype(np.uint32),
-    )
+    if tangents is not None and not np.all(np.isfinite(tangents)):
+        tangents = None  # built from the uv layout
+    local = shaded_mesh(pos, normals, mesh_uv, faces, tangents)
     world = local.transformed(instance.matrix)
     extent = np.abs(world.positions).max()
     if not np.isfinite(extent) or extent > MAX_MAGNITUDE:

@@ -305,13 +305,18 @@ def load_mesh_file(path: str | Path) -> MeshData:
             uv[o : o + len(file_uv)] = file_uv
 
     used, faces = np.unique(faces, return_inverse=True)
-    pos, nrm, uv = pos[used], nrm[used], uv[used]
-    faces = faces.reshape(-1, 3)
+    return shaded_mesh(pos[used], nrm[used], uv[used], faces.reshape(-1, 3))
+
+
+def shaded_mesh(positions, normals, uvs, faces, tangents=None) -> MeshData:
+    """A float32 :class:`MeshData` of float64 arrays, its tangents built from the uv layout unless given."""
+    if tangents is None:
+        tangents = compute_tangents(positions, normals, uvs, faces)
     return MeshData(
-        positions=pos.astype(np.float32),
-        normals=nrm.astype(np.float32),
-        tangents=compute_tangents(pos, nrm, uv, faces),
-        uvs=uv.astype(np.float32),
-        indices=faces.astype(np.uint32),
+        positions=np.asarray(positions, np.float32),
+        normals=np.asarray(normals, np.float32),
+        tangents=np.asarray(tangents, np.float32),
+        uvs=np.asarray(uvs, np.float32),
+        indices=np.asarray(faces, np.uint32),
     )
 

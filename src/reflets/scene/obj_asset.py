@@ -295,7 +295,7 @@ def _is_height_map(ref: dict) -> bool:
 def obj_part_mesh(path: Path, part: int) -> MeshData:
     """One material's faces of an OBJ file, with a full shading frame (file normals, else smooth ones; tangents
     from the uv layout)."""
-    from .meshfile import _unit, compute_tangents, smooth_normals, spherical_uv
+    from .meshfile import _unit, shaded_mesh, smooth_normals, spherical_uv
 
     parts = obj_parts(path)
     if not 0 <= part < len(parts):
@@ -313,11 +313,4 @@ def obj_part_mesh(path: Path, part: int) -> MeshData:
         normals[bad] = smooth[bad]
     else:
         normals = smooth
-    uv = uv[used] if uv is not None else spherical_uv(pos)
-    return MeshData(
-        positions=pos.astype(np.float32),
-        normals=normals.astype(np.float32),
-        tangents=compute_tangents(pos, normals, uv, faces),
-        uvs=uv.astype(np.float32),
-        indices=faces.astype(np.uint32),
-    )
+    return shaded_mesh(pos, normals, uv[used] if uv is not None else spherical_uv(pos), faces)

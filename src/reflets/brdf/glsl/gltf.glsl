@@ -32,6 +32,23 @@ uniform mat3 m_occlusion_map_uv;
 uniform sampler2D m_emissive_map;
 uniform mat3 m_emissive_map_uv;
 #endif
+#if BRDF_GLTF_COAT
+#define MATERIAL_COAT 1
+uniform vec2 m_clearcoat;            // KHR_materials_clearcoat: weight and roughness factors
+uniform float m_clearcoat_normal_scale;
+#endif
+#if BRDF_GLTF_COAT_MAP
+uniform sampler2D m_clearcoat_map;
+uniform mat3 m_clearcoat_map_uv;
+#endif
+#if BRDF_GLTF_COAT_ROUGHNESS_MAP
+uniform sampler2D m_clearcoat_roughness_map;
+uniform mat3 m_clearcoat_roughness_map_uv;
+#endif
+#if BRDF_GLTF_COAT_NORMAL_MAP
+uniform sampler2D m_clearcoat_normal_map;
+uniform mat3 m_clearcoat_normal_map_uv;
+#endif
 // the split sum's tables of this BRDF (reflets/brdf/gltf_ibl.py): (A, B, P) at (mu, roughness)
 uniform sampler2D m_ibl_lut;
 
@@ -42,6 +59,10 @@ float g_alpha = 1.0;
 float g_coverage = 1.0;
 float g_occlusion = 1.0;
 vec3 g_emission = vec3(0.0);
+float g_coat = 0.0;                  // the clear coat: weight, alpha, normal in the shading frame
+float g_coat_alpha = 1.0;
+vec3 g_coat_n = vec3(0.0, 0.0, 1.0);
+float g_coat_normal_variance = 0.0;
 float g_normal_variance = 0.0;  // of the normal map under the footprint (Toksvig), added to alpha^2
 
 vec4 gltf_texel(sampler2D map, mat3 to_image, vec2 uv) {
@@ -49,6 +70,26 @@ vec4 gltf_texel(sampler2D map, mat3 to_image, vec2 uv) {
 }
 
 void material_surface(vec2 uv, inout mat3 frame) {
+#if BRDF_GLTF_COAT
+    // the coat's normal: the geometric one (frame is still unmapped here), or its own normal map on it
+    vec3 coat_world = frame[2];
+#if BRDF_GLTF_COAT_NORMAL_MAP
+    vec3 coat_local = gltf_texel(m_clearcoat_normal_map, m_clearcoat_normal_map_uv, uv).xyz * 2.0 - 1.0;
+    float coat_length = clamp(length(coat_local), 1e-3, 1.0);  // Toksvig, as for the base's normal map
+    g_coat_normal_variance = 2.0 * (1.0 - coat_length) / coat_length * m_clearcoat_normal_scale * m_clearcoat_normal_scale;
+    coat_local.xy *= m_clearcoat_normal_scale;
+    coat_world = normalize(frame * coat_local);
+#endif
+    g_coat = m_clearcoat.x;
+#if BRDF_GLTF_COAT_MAP
+    g_coat *= gltf_texel(m_clearcoat_map, m_clearcoat_map_uv, uv).r;
+#endif
+    float coat_roughness = m_clearcoat.y;
+#if BRDF_GLTF_COAT_ROUGHNESS_MAP
+    coat_roughness *= gltf_texel(m_clearcoat_roughness_map, m_clearcoat_roughness_map_uv, uv).g;
+#endif
+    g_coat_alpha = max(coat_roughness * coat_roughness, 1e-3);
+#endif
     vec4 base = m_base_color;
 #if BRDF_GLTF_BASE_MAP
     base *= gltf_texel(m_base_color_map, m_base_color_map_uv, uv);
@@ -79,13 +120,17 @@ void material_surface(vec2 uv, inout mat3 frame) {
     float handedness = dot(cross(frame[2], frame[0]), frame[1]) < 0.0 ? -1.0 : 1.0;
     frame = shading_frame(normalize(frame * local), vec4(frame[0], handedness));
 #endif
+#if BRDF_GLTF_COAT
+    g_coat_n = normalize(transpose(frame) * coat_world);
+#endif
 }
 
 // Specular anti-aliasing: a pixel averages the lobe over the normals its footprint spans. On a near-mirror
 // (roughness 0: alpha = 1e-3) a point light's highlight is a sub-pixel needle that a few samples per pixel hit or
 // miss, so alpha^2 grows by (1) the screen-space variance of the geometric normal n (Kaplanyan, Hill, Patney &
 // Lefohn 2016, as Filament does it, with its constants: sigma^2 = 0.15, at most 0.2) and (2) the normal map's
-// variance under the footprint (Toksvig, from the mips, material_surface). Screen derivatives of the mapped normal
+// variance under the footprint (Toksvig, from the mips, material_surface); the clear coat's lobe likewise.
+// Screen derivatives of the mapped normal
 // were tried instead of (2): they widen the lobe far too much at the map's discontinuities. Measured against the
 // converged reference (docs/assets.md). Fragment stages only (screen derivatives).
 #ifndef COMPUTE_STAGE
@@ -93,6 +138,9 @@ void material_antialias(vec3 n) {
     vec3 du = dFdx(n), dv = dFdy(n);
     float widening = min(2.0 * 0.15 * (dot(du, du) + dot(dv, dv)), 0.2);
     g_alpha = sqrt(clamp(g_alpha * g_alpha + widening + g_normal_variance, 1e-6, 1.0));
+#if BRDF_GLTF_COAT
+    g_coat_alpha = sqrt(clamp(g_coat_alpha * g_coat_alpha + widening + g_coat_normal_variance, 1e-6, 1.0));
+#endif
 }
 #endif
 
@@ -118,6 +166,33 @@ void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, o
     alpha = g_alpha;
 }
 
+#if BRDF_GLTF_COAT
+// The coat's share of the environment's light: weight c F_c(v), its world normal, alpha_c and the lobe's albedo
+// (A + B of the split-sum table: F0 = 1, the Fresnel being the layering's own weight).
+void material_coat_ibl(mat3 frame, vec3 v, out float weight, out vec3 normal, out float alpha, out float albedo) {
+    normal = frame * g_coat_n;
+    float mu = clamp(dot(normal, v), 0.0, 1.0);
+    weight = g_coat * (0.04 + 0.96 * pow(1.0 - mu, 5.0));
+    alpha = g_coat_alpha;
+    vec3 abp = texture(m_ibl_lut, vec2(mu, sqrt(alpha))).rgb;
+    albedo = abp.x + abp.y;
+}
+
+// D_c V_c (n_c.l) / (n.l): the coat's GGX lobe about its own normal, lit with its own cosine
+float gltf_coat_lobe(vec3 wo, vec3 wi) {
+    float nv = dot(g_coat_n, wo), nl = dot(g_coat_n, wi);
+    if (nv <= 0.0 || nl <= 0.0) return 0.0;
+    float nh = dot(g_coat_n, normalize(wo + wi));
+    if (nh <= 0.0) return 0.0;
+    float a2 = g_coat_alpha * g_coat_alpha;
+    float q = nh * nh * (a2 - 1.0) + 1.0;
+    float d = a2 / (PI * q * q);
+    float lv = (sqrt(1.0 + a2 * (1.0 - nv * nv) / (nv * nv)) - 1.0) * 0.5;
+    float ll = (sqrt(1.0 + a2 * (1.0 - nl * nl) / (nl * nl)) - 1.0) * 0.5;
+    return d / (1.0 + lv + ll) / (4.0 * nv * nl) * nl / wi.z;
+}
+#endif
+
 // GGX D(h) and the Smith Lambda(w), isotropic
 float gltf_d(vec3 h, float a) {
     if (h.z <= 0.0) return 0.0;
@@ -136,5 +211,10 @@ vec3 brdf_eval(vec3 wo, vec3 wi) {
     float dv = gltf_d(h, g_alpha) / ((1.0 + gltf_lambda(wo, g_alpha) + gltf_lambda(wi, g_alpha)) * 4.0 * wo.z * wi.z);
     float f_d = 0.04 + 0.96 * schlick;
     vec3 f_m = g_base + (1.0 - g_base) * schlick;
-    return (1.0 - g_metallic) * ((1.0 - f_d) * g_base * INV_PI + f_d * dv) + g_metallic * f_m * dv;
+    vec3 value = (1.0 - g_metallic) * ((1.0 - f_d) * g_base * INV_PI + f_d * dv) + g_metallic * f_m * dv;
+#if BRDF_GLTF_COAT
+    float weight = g_coat * (0.04 + 0.96 * pow(1.0 - clamp(abs(dot(g_coat_n, wo)), 0.0, 1.0), 5.0));
+    value = (1.0 - weight) * value + weight * gltf_coat_lobe(wo, wi);
+#endif
+    return value;
 }

@@ -45,6 +45,15 @@ vec3 image_based_lighting(vec3 x, mat3 frame, vec3 wo) {
     float level = sqrt(alpha) * float(IBL_LEVELS - 1);
     vec3 prefiltered = textureLod(u_ibl_radiance, equirect_uv(u_ibl_env_from_world * r), level).rgb;
     vec3 light = seen_diffuse * diffuse + seen_specular * albedo * prefiltered;
+#ifdef MATERIAL_COAT
+    // a clear coat (glTF): its own prefiltered lookup about its own normal, over the base by its Fresnel weight
+    float coat_weight, coat_alpha, coat_albedo;
+    vec3 coat_n;
+    material_coat_ibl(frame, v, coat_weight, coat_n, coat_alpha, coat_albedo);
+    vec3 coat_dir = u_ibl_env_from_world * reflect(-v, coat_n);
+    vec3 coat_light = textureLod(u_ibl_radiance, equirect_uv(coat_dir), sqrt(coat_alpha) * float(IBL_LEVELS - 1)).rgb;
+    light = (1.0 - coat_weight) * light + coat_weight * seen_specular * coat_albedo * coat_light;
+#endif
 #ifdef MATERIAL_SURFACE
     light *= material_occlusion();  // the material's own ambient occlusion (glTF: the environment's light only)
 #endif
