@@ -139,3 +139,24 @@ def test_clearcoat_normal_of_its_own_is_lit_by_its_own_cosine(rng):
     at_mirror = points.eval(wo, mirror[None])[0, 0] * mirror[2]
     at_z = points.eval(wo, wo)[0, 0] * wo[0, 2]
     assert at_mirror > 50 * at_z
+
+
+def test_midpoint_samples_of_a_quad_light_meet_on_a_near_mirror():
+    """A roughness-0.02 metal sphere under a quad light, forward's 8 × 8 midpoint samples: each sample's lobe is
+    widened by its patch (gltf.glsl, brdf_eval_patch), so the mirror shows the light, not 64 dots. Measured 6.0 %
+    against the reference (15.9 % unwidened)."""
+    import reflets
+    from reflets.reference import reference
+
+    scene = {
+        "camera": {"position": [0, 0.2, 3], "look_at": [0, 0, 0], "fov_y": 30, "size": [128, 96]},
+        "materials": {"m": {"type": "gltf", "base_color": [0.9, 0.9, 0.9, 1], "metallic": 1.0, "roughness": 0.02}},
+        "mesh": [{"shape": "sphere", "radius": 0.8, "material": "m"}],
+        "light": [{"type": "quad", "corners": [[-0.6, 1.5, 0.2], [0.6, 1.5, 0.2], [-0.6, 1.5, 1.4]],
+                   "radiance": [5, 5, 5]}],  # fmt: skip
+        "background": [0, 0, 0],
+    }
+    gpu = reflets.render(scene, method="forward", spp=16)
+    ref = reference(scene, spp=64, pixel="box", progress=False).image
+    assert reflets.compare(gpu, ref)["relmse"] < 0.09
+    assert abs(gpu.sum() / ref.sum() - 1.0) < 0.02  # the widening moves light, it does not add any

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..api import render
 from ..reference import reference
+from ..scene.assets import asset_path
 from ..scene.model import DirectionalLight, PointLight, Scene
 
 #: the lights of the comparison (radiometric; the assets are about a unit across, the camera on +z)
@@ -81,11 +82,10 @@ def asset_error(scene: Scene, size: tuple[int, int], spp: int = 16, reference_sp
     }
 
 
-#: the benchmark's assets (copied into the repository's test data with their licences)
-TEST_ASSETS = Path(__file__).resolve().parents[3] / "tests" / "data" / "gltf"
+#: the benchmark's assets (shipped with reflets for the gallery, with their licences)
 ASSET_FILES = {
-    "DamagedHelmet": TEST_ASSETS / "DamagedHelmet" / "DamagedHelmet.glb",
-    "WaterBottle": TEST_ASSETS / "WaterBottle" / "WaterBottle.gltf",
+    "DamagedHelmet": asset_path("DamagedHelmet/DamagedHelmet.glb"),
+    "WaterBottle": asset_path("WaterBottle/WaterBottle.gltf"),
 }
 #: the timing's point light, in units of the asset's bounding-sphere radius from its centre
 POINT_LIGHT_OFFSET = (1.5, 2.0, 3.0)

@@ -52,6 +52,11 @@ def default_environment() -> Path:
     return Path(str(resources.files("reflets").joinpath("data", "environments", "studio.hdr")))
 
 
+def asset_path(name: str) -> Path:
+    """A real asset shipped with reflets (``data/assets``: Khronos' DamagedHelmet and WaterBottle, credited there)."""
+    return Path(str(resources.files("reflets").joinpath("data", "assets", *name.split("/"))))
+
+
 @dataclass
 class Asset:
     """What a file holds, in scene-model terms (dicts ready for validation), and what was left out."""

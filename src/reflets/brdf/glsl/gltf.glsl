@@ -144,6 +144,23 @@ void material_antialias(vec3 n) {
 }
 #endif
 
+// One midpoint sample of an area light stands for a patch of angular radius rho: on a near-mirror the sharp lobe
+// would show each sample as a dot. The lobe is widened by the patch, alpha^2 + 0.05 rho^2, so that the samples'
+// lobes meet (GGX stays normalised). The constant is measured (docs/assets.md): a roughness-0.02 metal sphere
+// under a quad light, 8 x 8 samples, against the reference: 15.9 % unwidened, 6.0 % at 0.05, 11.9 % at 0.1, 40 %
+// at 0.25 (too blurred); the helmet of the gallery: 17 %, 1.6 %, 1.0 %, 1.2 %.
+#define MATERIAL_PATCH_EVAL 1
+vec3 brdf_eval(vec3 wo, vec3 wi);
+vec3 brdf_eval_patch(vec3 wo, vec3 wi, float rho) {
+    float alpha = g_alpha, coat_alpha = g_coat_alpha, spread = 0.05 * rho * rho;
+    g_alpha = sqrt(alpha * alpha + spread);
+    g_coat_alpha = sqrt(coat_alpha * coat_alpha + spread);
+    vec3 f = brdf_eval(wo, wi);
+    g_alpha = alpha;
+    g_coat_alpha = coat_alpha;
+    return f;
+}
+
 vec3 material_emission() { return g_emission; }
 float material_occlusion() { return g_occlusion; }
 // false where alpha_mode = "mask" cuts the surface away

@@ -109,7 +109,12 @@ vec3 direct_lighting(vec3 x, mat3 frame, vec3 wo) {
         float cos_y = -dot(nl.xyz, wi);
         if (nl.w > 0.5) cos_y = abs(cos_y);
         if (cos_x <= 0.0 || cos_y <= 0.0) continue;
-        sum += brdf_eval(wo, to_local * wi) * area_data[3 * i + 2].rgb * (shadow * cos_x * cos_y * p.w / r2);
+#ifdef MATERIAL_PATCH_EVAL
+        vec3 f = brdf_eval_patch(wo, to_local * wi, sqrt(p.w * cos_y / (PI * r2)));  // the sample's patch
+#else
+        vec3 f = brdf_eval(wo, to_local * wi);
+#endif
+        sum += f * area_data[3 * i + 2].rgb * (shadow * cos_x * cos_y * p.w / r2);
     }
     }
 #endif
