@@ -85,7 +85,11 @@ def load_asset(path: str | Path) -> Asset:
     gltf = read_gltf(path)
     warnings: list[str] = []
     names = _material_names(gltf)
-    materials = {names[i]: _material(gltf, i, warnings) for i in range(len(gltf.doc.materials or []))}
+    left_out: dict[str, list[str]] = {}  # what a material's feature becomes instead → the materials concerned
+    materials = {names[i]: _material(gltf, i, warnings, left_out) for i in range(len(gltf.doc.materials or []))}
+    for what, which in left_out.items():  # one line per feature, however many materials have it
+        listed = ", ".join(f"'{n}'" for n in which[:3]) + (f" and {len(which) - 3} more" if len(which) > 3 else "")
+        warnings.append(f"{gltf.path.name}: {what} (material{'s' if len(which) > 1 else ''} {listed})")
     parts = []
     default_material = None
     for index, instance in enumerate(gltf.instances):
@@ -159,7 +163,7 @@ def _texture(gltf: GltfFile, info, where: str, warnings: list[str]) -> dict | No
     return ref
 
 
-def _material(gltf: GltfFile, index: int, warnings: list[str]) -> dict:
+def _material(gltf: GltfFile, index: int, warnings: list[str], left_out: dict[str, list[str]]) -> dict:
     m = gltf.doc.materials[index]
     where = f"materials[{index}]"
     pbr = m.pbrMetallicRoughness
@@ -195,13 +199,13 @@ def _material(gltf: GltfFile, index: int, warnings: list[str]) -> dict:
         out["alpha_cutoff"] = float(np.clip(m.alphaCutoff, 0.0, 1.0))
     name = m.name or where
     if mode == "blend":
-        warnings.append(f"{gltf.path.name}: material '{name}': alphaMode BLEND rendered opaque (no blending yet)")
+        left_out.setdefault("alphaMode BLEND rendered opaque (no blending yet)", []).append(name)
     if mode == "mask":
-        warnings.append(f"{gltf.path.name}: material '{name}': alphaMode MASK cuts the surface from the camera "
-                        "only (its shadows and the references keep the whole surface)")  # fmt: skip
+        left_out.setdefault("alphaMode MASK cuts the surface from the camera only (its shadows and the references "
+                            "keep the whole surface)", []).append(name)  # fmt: skip
     for extension in sorted(set(extensions) - SUPPORTED_MATERIAL_EXTENSIONS):
-        warnings.append(f"{gltf.path.name}: material '{name}': {extension} not supported, its base "
-                        "metallic-roughness material is rendered")  # fmt: skip
+        left_out.setdefault(f"{extension} not supported, the base metallic-roughness material is rendered",
+                            []).append(name)  # fmt: skip
     return {key: value for key, value in out.items() if value is not None}
 
 
