@@ -175,5 +175,9 @@ def test_adaptive_rounds_refine_noisy_pixels_without_bias(minimal_scene):
     assert abs(z.mean()) < 0.15 and np.abs(z).max() < 5.0
     again = reference(scene, spp=4, progress=False, adaptive_error=0.02, adaptive_spp=1024)
     assert np.array_equal(again.image, refined.image)  # seeded rounds: the same image
-    with pytest.raises(ArgumentError, match="adaptive_error"):
-        reference(scene, spp=4, progress=False, adaptive_error=-1.0)
+    for bad in (-1.0, 0.0, float("nan"), float("inf"), "x"):
+        with pytest.raises(ArgumentError, match="adaptive_error"):
+            reference(scene, spp=4, progress=False, adaptive_error=bad)
+    for bad in (0, 2, 10**9, 1.5):  # below spp, or a pixel's samples past memory
+        with pytest.raises(ArgumentError, match="adaptive_spp"):
+            reference(scene, spp=4, progress=False, adaptive_error=0.02, adaptive_spp=bad)

@@ -142,12 +142,17 @@ def test_scene_toml_takes_an_obj_without_material(tmp_path):
         ("newmtl left\nmap_Kd -s 2 2\n", "names no image"),
         ("newmtl left\nmap_Kd missing.png\n", "missing.png"),
         ("newmtl left\nmap_Kd bad.png\n", "not an image"),
+        ("newmtl left\nd -5\n", "d must be in [0, 1]"),
+        ("newmtl left\nPr 5\n", "Pr must be in [0, 1]"),
+        ("newmtl left\nmap_Pr -imfchan x bad.png\n", "-imfchan x"),
+        ("newmtl left\nmap_Kd folder\n", "is a directory"),
     ],
 )
 def test_bad_mtl_is_one_line_exit_2_nothing_written(mtl, phrase, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     quads(tmp_path, mtl + "newmtl right\n")
     (tmp_path / "bad.png").write_bytes(b"not a png")
+    (tmp_path / "folder").mkdir()
     assert main(["render", "q.obj", "-o", "out.png", "--size", "16x12"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and phrase in err[-1], err
@@ -168,3 +173,12 @@ def test_texture_channels_swizzle():
     codes = load_texture(ref, False).codes
     assert (codes[..., 0] == 0).all() and (codes[..., 3] == 255).all()
     assert np.array_equal(codes[..., 1], plain[..., 0]) and np.array_equal(codes[..., 2], plain[..., 2])
+
+
+def test_an_obj_that_is_a_directory_is_one_line(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "d.obj").mkdir()
+    assert main(["render", "d.obj", "-o", "out.png"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "d.obj" in err[0] and "not a regular file" in err[0]
+    assert not (tmp_path / "out.png").exists()

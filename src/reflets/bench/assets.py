@@ -29,6 +29,7 @@ import numpy as np
 
 from ..api import render
 from ..reference import reference
+from ..reference.montecarlo import MAX_ADAPTIVE_SPP
 from ..scene.assets import asset_path
 from ..scene.model import DirectionalLight, PointLight, Scene
 
@@ -41,8 +42,9 @@ BLOCK = 4
 #: the reference refines pixels noisier than this (relative standard error): a point light's highlight in a
 #: near-mirror texel is a sub-pixel spike that a fixed 16 samples hit or miss (the helmet's visor: ±55 %)
 ADAPTIVE_ERROR = 0.05
-#: ... with up to this many samples a pixel (a glint a millionth of a pixel wide needs them)
-ADAPTIVE_SPP = 1 << 18
+#: ... with up to this many samples a pixel, the most the reference allows (a glint a millionth of a pixel wide
+#: needs them)
+ADAPTIVE_SPP = MAX_ADAPTIVE_SPP
 
 
 def lit_for_comparison(scene: Scene) -> Scene:

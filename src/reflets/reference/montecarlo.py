@@ -69,6 +69,18 @@ class ReferenceResult:
         return samples / max(self.seconds, 1e-9)
 
 
+#: the most samples adaptive rounds give a pixel: a round holds one pixel's samples at once (~1 KB a sample)
+MAX_ADAPTIVE_SPP = 1 << 18
+
+
+def _check_adaptive(error, max_spp, spp: int) -> None:
+    if isinstance(error, bool) or not isinstance(error, int | float) or not (math.isfinite(error) and error > 0):
+        raise ArgumentError(f"must be a positive number, got {error!r}", field="adaptive_error")
+    if isinstance(max_spp, bool) or not isinstance(max_spp, int) or not spp <= max_spp <= MAX_ADAPTIVE_SPP:
+        raise ArgumentError(f"must be an integer from spp ({spp}) to {MAX_ADAPTIVE_SPP:,}, got {max_spp!r}",
+                            field="adaptive_spp")  # fmt: skip
+
+
 def _mis(p_this: np.ndarray, p_other: np.ndarray, heuristic: str) -> np.ndarray:
     if heuristic == "power":
         a, b = p_this * p_this, p_other * p_other
@@ -120,6 +132,8 @@ class MonteCarloReference:
             raise ArgumentError(f"must be ≥ 1, got {spp}", field="spp")
         if pixel not in ("center", "box"):
             raise ArgumentError(f"unknown pixel mode '{pixel}'; allowed: center, box", field="pixel")
+        if adaptive_error is not None:
+            _check_adaptive(adaptive_error, adaptive_spp, spp)
         width, height = size or self.scene.camera.size
         n_pixels = width * height
         check(
@@ -168,8 +182,6 @@ class MonteCarloReference:
 
     def _refine(self, mean, err, counts, target, max_spp, seed, width, height, pixel) -> None:
         """Adaptive rounds (module docstring): noisy pixels re-rendered alone with 4× the samples."""
-        if not (math.isfinite(target) and target > 0):
-            raise ArgumentError(f"must be a positive number, got {target}", field="adaptive_error")
         weights = np.array([0.2126, 0.7152, 0.0722])
         for round_ in range(1, 64):
             luminance = mean @ weights

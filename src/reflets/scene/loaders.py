@@ -130,12 +130,12 @@ def scene_from_asset(path: str | Path, camera: int | str | None = None, environm
     from .assets import default_environment, load_asset
 
     path = Path(path)
-    if not path.exists():
-        raise SceneError("file not found", file=path)
+    if not path.is_file():
+        raise SceneError("file not found" if not path.exists() else "is not a regular file", file=path)
     asset = load_asset(path)
     _warn(asset.warnings)
     if not asset.parts:
-        raise SceneError("the default scene has no mesh to render", file=path)
+        raise SceneError("no triangles to render (a glTF file: none in its default scene)", file=path)
     lights: list[dict] = list(asset.lights)
     if environment is not None or not lights:
         env = Path(environment) if environment is not None else default_environment()

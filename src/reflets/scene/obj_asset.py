@@ -102,7 +102,8 @@ def load_obj_asset(path: Path) -> tuple[list[dict], dict[str, dict], list[str]]:
             for name in line.split(None, 1)[1].split() if len(words) > 1 else []:
                 mtl = path.parent / name
                 if not mtl.is_file():
-                    warnings.append(f"{path.name}: material library {name} not found: its materials are the default")
+                    why = "is not a file" if mtl.exists() else "not found"
+                    warnings.append(f"{path.name}: material library {name} {why}: its materials are the default")
                     continue
                 for key, value in parse_mtl(mtl, warnings).items():
                     libraries.setdefault(key, value)
@@ -145,7 +146,8 @@ def parse_mtl(path: Path, warnings: list[str]) -> dict[str, dict]:
     return out
 
 
-def _numbers(path: Path, statement: tuple[str, list[str], int], count: int) -> list[float]:
+def _numbers(path: Path, statement: tuple[str, list[str], int], count: int, unit: bool = False) -> list[float]:
+    """A statement's ``count`` numbers (finite, at most 1e6; ``unit``: in [0, 1]); "Kd 0.5" is grey."""
     word, args, number = statement
     try:
         values = [float(a) for a in args[:count]]
@@ -153,7 +155,9 @@ def _numbers(path: Path, statement: tuple[str, list[str], int], count: int) -> l
         values = []
     if not values or not all(math.isfinite(v) and abs(v) <= 1e6 for v in values):
         raise SceneError(f"line {number}: {word} needs {count} finite number(s), got {' '.join(args)!r}", file=path)
-    return values + [values[-1]] * (count - len(values))  # "Kd 0.5" is grey
+    if unit and not all(0.0 <= v <= 1.0 for v in values):
+        raise SceneError(f"line {number}: {word} must be in [0, 1], got {' '.join(args)!r}", file=path)
+    return values + [values[-1]] * (count - len(values))
 
 
 def _map(path: Path, statement: tuple[str, list[str], int]) -> tuple[dict, dict[str, list[str]]]:
@@ -172,6 +176,9 @@ def _map(path: Path, statement: tuple[str, list[str], int]) -> tuple[dict, dict[
         options[option] = taken
     if i >= len(args):
         raise SceneError(f"line {number}: {word} names no image file", file=path)
+    channel = (options.get("-imfchan") or ["r"])[0].lower()
+    if channel not in _CHANNELS:
+        raise SceneError(f"line {number}: {word} -imfchan {channel}: allowed r, g, b, m, l, z", file=path)
     ref: dict = {"texture": path.parent / " ".join(args[i:])}
     try:
         scale = [float(v) for v in options.get("-s", [])] + [1.0, 1.0]
@@ -194,7 +201,7 @@ def _is_number(word: str) -> bool:
 
 
 def _channel(options: dict[str, list[str]]) -> str:
-    return _CHANNELS.get((options.get("-imfchan") or ["r"])[0].lower(), "r")
+    return _CHANNELS[(options.get("-imfchan") or ["r"])[0].lower()]  # checked by _map
 
 
 def _material(path: Path, name: str, statements: dict, warnings: list[str]) -> dict:
@@ -207,15 +214,15 @@ def _material(path: Path, name: str, statements: dict, warnings: list[str]) -> d
     kd, d, tr = take("kd"), take("d"), take("tr")
     coverage = 1.0
     if d is not None:
-        coverage = _numbers(path, d, 1)[0]
+        coverage = _numbers(path, d, 1, unit=True)[0]
     elif tr is not None:
-        transparency = _numbers(path, tr, 1)[0]
+        transparency = _numbers(path, tr, 1, unit=True)[0]
         if transparency >= 1.0:  # by the letter invisible; MeshLab and others write "Tr 1" for opaque
             warnings.append(f"{where}: Tr {transparency:g} (fully transparent by the format) read as opaque")
         else:
             coverage = 1.0 - transparency
     color = _numbers(path, kd, 3) if kd is not None else [1.0, 1.0, 1.0]
-    out["base_color"] = tuple(float(np.clip(c, 0.0, 1.0)) for c in color) + (float(np.clip(coverage, 0.0, 1.0)),)
+    out["base_color"] = tuple(float(np.clip(c, 0.0, 1.0)) for c in color) + (coverage,)
     if coverage < 1.0:
         out["alpha_mode"] = "blend"
         warnings.append(f"{where}: d {coverage:g}: alphaMode BLEND rendered opaque (no blending yet)")
@@ -234,7 +241,7 @@ def _material(path: Path, name: str, statements: dict, warnings: list[str]) -> d
 
     pr, pm, ns, ks = take("pr"), take("pm"), take("ns"), take("ks")
     if pr is not None:
-        out["roughness"] = float(np.clip(_numbers(path, pr, 1)[0], 0.0, 1.0))
+        out["roughness"] = _numbers(path, pr, 1, unit=True)[0]
     else:
         exponent = float(np.clip(_numbers(path, ns, 1)[0], 0.0, 1e4)) if ns is not None else 0.0
         roughness = (2.0 / (exponent + 2.0)) ** 0.25
@@ -245,7 +252,7 @@ def _material(path: Path, name: str, statements: dict, warnings: list[str]) -> d
                 roughness += (1.0 - roughness) * (1.0 - max(luminance, 0.0) / 0.1)
         out["roughness"] = float(np.clip(roughness, 0.0, 1.0))
     if pm is not None:
-        out["metallic"] = float(np.clip(_numbers(path, pm, 1)[0], 0.0, 1.0))
+        out["metallic"] = _numbers(path, pm, 1, unit=True)[0]
     map_pr, map_pm = take("map_pr"), take("map_pm")
     if map_pr is not None or map_pm is not None:
         refs = [None if s is None else _map(path, s) for s in (map_pr, map_pm)]

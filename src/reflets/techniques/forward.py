@@ -87,6 +87,7 @@ TextureAnisotropy = Annotated[
     Field(
         ge=1.0,
         le=16.0,
+        allow_inf_nan=False,
         description="material textures' anisotropic filtering (1: trilinear only, as Filament and three.js leave "
         "glTF textures; free on GPUs, about a third of a textured frame on llvmpipe)",
     ),
