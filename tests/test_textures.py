@@ -43,25 +43,23 @@ def test_swizzle_reads_channels_and_constants():
 
 
 def test_gpu_samples_a_data_texture_at_float_precision(ctx):
-    """A 2-texel ramp of codes 100 and 101 sampled 30 % of the way: 100.3 / 255 from the float16 texture (an 8-bit
-    texture's filtered value is rounded to 8 bits on llvmpipe: 100 or 101)."""
+    """A 2 × 2 data texture of codes 100 and 101: its 1 × 1 mip, as the GPU samples it, is 100.5 / 255 — the
+    float16 chain keeps it; an 8-bit chain rounds it to 100 or 101 (a normal tilted by 1/510 at every mip)."""
     import moderngl
 
     from reflets.textures import texture_for
 
-    ramp = np.array([[[100, 0, 0, 255], [101, 0, 0, 255]]], np.uint8)
-    data = TextureData(ramp, False, key="ramp", wrap=("clamp", "clamp"))
-    texture = texture_for(ctx, data)
+    codes = np.array([[[100, 0, 0, 255], [101, 0, 0, 255]], [[101, 0, 0, 255], [100, 0, 0, 255]]], np.uint8)
+    texture = texture_for(ctx, TextureData(codes, False, key="checker", wrap=("clamp", "clamp")))
     texture.use(0)
     program = ctx.program(
         vertex_shader="#version 330\nvoid main() { gl_Position = vec4(0.0, 0.0, 0.0, 1.0); gl_PointSize = 1.0; }",
         fragment_shader="#version 330\nuniform sampler2D t; out vec4 c;\n"
-        "void main() { c = textureLod(t, vec2(0.4, 0.5), 0.0); }",
+        "void main() { c = textureLod(t, vec2(0.5, 0.5), 1.0); }",
     )
     target = ctx.simple_framebuffer((1, 1), components=4, dtype="f4")
     target.use()
     program["t"] = 0
-    vao = ctx.vertex_array(program, [])
-    vao.render(mode=moderngl.POINTS, vertices=1)
+    ctx.vertex_array(program, []).render(mode=moderngl.POINTS, vertices=1)
     value = np.frombuffer(target.read(components=4, dtype="f4"), dtype=np.float32)[0]
-    assert abs(value * 255.0 - 100.3) < 0.05, value * 255.0
+    assert abs(value * 255.0 - 100.5) < 0.05, value * 255.0

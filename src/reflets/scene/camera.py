@@ -60,14 +60,6 @@ def camera_rays(camera: Camera, columns, rows, width: int, height: int) -> tuple
     return np.broadcast_to(position, dirs.shape).copy(), dirs
 
 
-def local_directions(camera: Camera, columns, rows, width: int, height: int) -> np.ndarray:
-    """Camera-space directions (…, 3), not normalised (z = −1), through continuous pixel positions (x = columns,
-    y = rows from the top-left corner) of a perspective camera: the principal point at the image centre moved by
-    ``principal_offset``, the horizontal focal length ``pixel_aspect`` times the vertical one."""
-    x, y = _image_plane(camera.model_copy(update={"projection": "perspective"}), columns, rows, width, height)
-    return np.stack(np.broadcast_arrays(x, y, -np.ones((1,) * np.ndim(x))), axis=-1)
-
-
 def pixel_rays(camera: Camera, size: tuple[int, int] | None = None, offsets=(0.5, 0.5)):
     """Ray origin and unit directions (H, W, 3) through pixel positions (j + ox, i + oy); the origin is the
     camera's position (3,) for a perspective camera, one point per pixel (H, W, 3) for an orthographic one."""

@@ -159,7 +159,7 @@ def camera_range(camera, boxes: np.ndarray) -> tuple[float, float | None]:
     just beyond the farthest box corner along the view."""
     far = camera.far
     near = camera.near
-    if getattr(camera, "orthographic", False):
+    if camera.orthographic:
         near = 0.0 if near is None else near
         if far is None:
             boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 2, 3)

@@ -47,14 +47,15 @@ _CHANNELS = {"r": "r", "g": "g", "b": "b", "m": "r", "l": "r", "z": "r"}  # -imf
 
 
 @functools.lru_cache(maxsize=8)
-def _parts(path: Path, size: int, mtime: int) -> tuple[tuple[str | None, np.ndarray, np.ndarray | None,
-                                                            np.ndarray | None, np.ndarray], ...]:  # fmt: skip
-    """(MTL material name, positions, file normals or None, uv or None, faces) per material of the file."""
+def _read(path: Path, size: int, mtime: int) -> tuple[tuple[str, ...], tuple]:
+    """The file's ``mtllib`` names, and (MTL material name, positions, file normals or None, uv or None, faces)
+    per material of the file: read and parsed once while the file is unchanged."""
     import trimesh
 
     from .meshfile import decode_text
 
     text = decode_text(path.read_bytes())
+    libraries = tuple(name for line in text.splitlines() if line.split()[:1] == ["mtllib"] for name in line.split()[1:])
     # trimesh keeps a material's name only if it can build it from the first library alone (a grey "Kd 0.8" or a
     # second mtllib loses them all): it is handed a library of bare names, the materials are read by parse_mtl
     order = list(dict.fromkeys(_USEMTL.findall(text)))
@@ -81,34 +82,34 @@ def _parts(path: Path, size: int, mtime: int) -> tuple[tuple[str | None, np.ndar
         uv = np.asarray(uv, dtype=np.float64) if uv is not None and len(uv) == len(pos) else None
         material = getattr(getattr(geom.visual, "material", None), "name", None)
         out.append((material, pos, normals, uv, np.asarray(geom.faces, dtype=np.int64)))
-    return tuple(sorted(out, key=lambda part: order.index(part[0]) + 1 if part[0] in order else 0))  # file order
+    parts = tuple(sorted(out, key=lambda part: order.index(part[0]) + 1 if part[0] in order else 0))  # file order
+    return libraries, parts
+
+
+def _read_file(path: Path):
+    stat = path.stat()
+    return _read(path.absolute(), stat.st_size, stat.st_mtime_ns)
 
 
 def obj_parts(path: Path):
-    stat = path.stat()
-    return _parts(path.absolute(), stat.st_size, stat.st_mtime_ns)
+    return _read_file(path)[1]
 
 
 def load_obj_asset(path: Path) -> tuple[list[dict], dict[str, dict], list[str]]:
     """The OBJ file's parts (FileMesh dicts), MTL materials (module docstring) and warnings (each line once)."""
-    from .meshfile import decode_text
-
     warnings: list[str] = []
     libraries: dict[str, dict] = {}
-    text = decode_text(path.read_bytes())
-    for line in text.splitlines():
-        words = line.split()
-        if words and words[0] == "mtllib":
-            for name in line.split(None, 1)[1].split() if len(words) > 1 else []:
-                mtl = path.parent / name
-                if not mtl.is_file():
-                    why = "is not a file" if mtl.exists() else "not found"
-                    warnings.append(f"{path.name}: material library {name} {why}: its materials are the default")
-                    continue
-                for key, value in parse_mtl(mtl, warnings).items():
-                    libraries.setdefault(key, value)
+    names, obj = _read_file(path)
+    for name in names:
+        mtl = path.parent / name
+        if not mtl.is_file():
+            why = "is not a file" if mtl.exists() else "not found"
+            warnings.append(f"{path.name}: material library {name} {why}: its materials are the default")
+            continue
+        for key, value in parse_mtl(mtl, warnings).items():
+            libraries.setdefault(key, value)
     parts, materials = [], {}
-    for index, (material, *_rest) in enumerate(obj_parts(path)):
+    for index, (material, *_rest) in enumerate(obj):
         name = f"{path.stem}/{material or 'default'}"
         if material not in libraries and material is not None and libraries:
             warnings.append(f"{path.name}: usemtl {material}: no such material in its libraries: the default")

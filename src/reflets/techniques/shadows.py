@@ -373,7 +373,7 @@ def cascade_spheres(camera, centre: np.ndarray, radius: float, count: int = CASC
     as wide as the scene. A scene deeper than ``CASCADE_RANGE`` times the point of interest's distance (a ground
     plane to the horizon) takes the range of that ratio centred on it (log scale) instead of its far end: the
     near objects keep fine slices."""
-    if getattr(camera, "orthographic", False):  # a constant pixel footprint: the whole scene in one view
+    if camera.orthographic:  # a constant pixel footprint: the whole scene in one view
         return []
     eye = np.asarray(camera.position, np.float64)
     forward = np.asarray(camera.look_at, np.float64) - eye
