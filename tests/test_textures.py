@@ -12,17 +12,28 @@ def _data(srgb: bool, shape=(6, 10)) -> TextureData:
     return TextureData(codes, srgb, key="test")
 
 
-def test_data_mips_are_float16_box_means_down_to_one_texel():
-    """Normals and roughness keep their precision on the GPU: float16 levels, each the mean of the one above (an
-    odd side's last three merge), the last one of a power-of-two image the mean of the whole."""
+def test_normal_map_mips_are_float16_box_means_of_unit_normals_down_to_one_texel():
+    """Normals keep their precision on the GPU: float16 levels, each the mean of the one above (an odd side's last
+    three merge), the last one of a power-of-two image the mean of the whole; level 0's vectors made unit."""
     data = _data(srgb=False)
-    levels = data.mip_chain()
+    levels = data.mip_chain(normal_map=True)
     assert all(level.dtype == np.float16 for level in levels)
     assert [level.shape[:2] for level in levels] == [(6, 10), (3, 5), (1, 2), (1, 1)]
+    assert np.allclose(np.linalg.norm(levels[0][..., :3].astype(float) * 2 - 1, axis=-1), 1.0, atol=2e-3)
     square = _data(srgb=False, shape=(4, 8))
-    assert np.allclose(square.mip_chain()[-1][0, 0], square.texels.reshape(-1, 4).mean(axis=0), atol=1e-3)
-    assert np.allclose(levels[0], data.texels, atol=1e-3)
-    assert data.gpu_bytes == int(6 * 10 * 8 * 4 / 3)
+    chain = square.mip_chain(normal_map=True)
+    assert np.allclose(chain[-1][0, 0], chain[0].astype(float).reshape(-1, 4).mean(axis=0), atol=1e-3)
+    assert data.gpu_bytes(normal_map=True) == int(6 * 10 * 8 * 4 / 3)
+
+
+def test_other_data_mips_are_its_codes_then_rounded_box_means():
+    """Roughness, metalness, occlusion: the file's 8-bit codes, the mips their means rounded to a code."""
+    data = _data(srgb=False, shape=(4, 8))
+    levels = data.mip_chain()
+    assert levels[0] is data.codes and all(level.dtype == np.uint8 for level in levels)
+    mean = data.codes.reshape(-1, 4).astype(float).mean(axis=0)
+    assert np.all(np.abs(levels[-1][0, 0].astype(float) - mean) <= 0.5 + 1e-9)
+    assert data.gpu_bytes() == int(4 * 8 * 4 * 4 / 3)
 
 
 def test_colour_mips_are_srgb_bytes_averaged_in_linear_values():
@@ -32,7 +43,7 @@ def test_colour_mips_are_srgb_bytes_averaged_in_linear_values():
     mean = data.texels.reshape(-1, 4).mean(axis=0)
     decoded = TextureData(levels[1], True, key="x").texels[0, 0]
     assert np.allclose(decoded, mean, atol=2.5 / 255)  # not the mean of the sRGB codes
-    assert data.gpu_bytes == int(2 * 2 * 4 * 4 / 3)
+    assert data.gpu_bytes() == int(2 * 2 * 4 * 4 / 3)
 
 
 def test_swizzle_reads_channels_and_constants():
@@ -42,15 +53,19 @@ def test_swizzle_reads_channels_and_constants():
     assert swizzled(codes, "aaar").tolist() == [[[3, 3, 3, 0], [7, 7, 7, 4]]]
 
 
-def test_gpu_samples_a_data_texture_at_float_precision(ctx):
-    """A 2 × 2 data texture of codes 100 and 101: its 1 × 1 mip, as the GPU samples it, is 100.5 / 255 — the
-    float16 chain keeps it; an 8-bit chain rounds it to 100 or 101 (a normal tilted by 1/510 at every mip)."""
+def test_gpu_samples_a_normal_map_at_float_precision(ctx):
+    """A 2 × 2 normal map of x codes 100 and 102: its 1 × 1 mip, as the GPU samples it, is the mean of the unit
+    vectors — the float16 chain keeps it; an 8-bit chain rounds it to a code (a normal tilted by 1/510 at every
+    mip)."""
     import moderngl
 
     from reflets.textures import texture_for
 
-    codes = np.array([[[100, 0, 0, 255], [101, 0, 0, 255]], [[101, 0, 0, 255], [100, 0, 0, 255]]], np.uint8)
-    texture = texture_for(ctx, TextureData(codes, False, key="checker", wrap=("clamp", "clamp")))
+    codes = np.array([[[100, 128, 255, 255], [102, 128, 255, 255]], [[102, 128, 255, 255], [100, 128, 255, 255]]],
+                     np.uint8)  # fmt: skip
+    data = TextureData(codes, False, key="checker", wrap=("clamp", "clamp"))
+    texture = texture_for(ctx, data, normal_map=True)
+    expected = data.mip_chain(normal_map=True)[1][0, 0, 0] * 255.0
     texture.use(0)
     program = ctx.program(
         vertex_shader="#version 330\nvoid main() { gl_Position = vec4(0.0, 0.0, 0.0, 1.0); gl_PointSize = 1.0; }",
@@ -61,5 +76,6 @@ def test_gpu_samples_a_data_texture_at_float_precision(ctx):
     target.use()
     program["t"] = 0
     ctx.vertex_array(program, []).render(mode=moderngl.POINTS, vertices=1)
-    value = np.frombuffer(target.read(components=4, dtype="f4"), dtype=np.float32)[0]
-    assert abs(value * 255.0 - 100.5) < 0.05, value * 255.0
+    value = np.frombuffer(target.read(components=4, dtype="f4"), dtype=np.float32)
+    assert abs(value[0] * 255.0 - expected) < 0.05, (value[0] * 255.0, expected)
+    assert abs(expected - np.rint(expected)) > 0.2  # between two codes: what an 8-bit chain could not hold

@@ -6,8 +6,10 @@ emission) is sRGB-encoded and linearised, data (metallic-roughness, normals, occ
 
 Both renderers read the same decoded texels:
 
-- the GPU gets ``SRGB8_ALPHA8`` for colour (the sampler linearises before filtering) and float16 for data
-  (normals, roughness: 8-bit filtering would tilt a normal by up to 1/255), with a full mip chain built here in
+- the GPU gets ``SRGB8_ALPHA8`` for colour (the sampler linearises before filtering), float16 for normal maps
+  (8-bit mips and filtering would tilt a normal by up to 1/255 and blur the Toksvig lengths) and 8-bit codes for
+  other data (roughness, metalness, occlusion: their files' own precision; float16 cost the helmet 7 % of its
+  frame on llvmpipe, measured with ``reflets bench assets``), with a full mip chain built here in
   linear float (a box filter; the driver's own mipmap generation is not guaranteed gamma-correct for sRGB
   formats), trilinear and 16× anisotropic filtering, and
   the wrap modes of the file's sampler; one texture per content and role, shared by every object and renderer
@@ -142,8 +144,9 @@ class TextureData:
 
     def mip_chain(self, normal_map: bool = False) -> list[np.ndarray]:
         """The GPU's levels down to 1×1, each the box mean of the one above in linear values (2×2 texels; an odd
-        side's last three rows / columns merge into one): colour re-encoded as sRGB uint8 (h, w, 4); data as
-        float16, so that neither the mips nor the sampler's bilinear weights quantise a normal to 8 bits.
+        side's last three rows / columns merge into one): colour re-encoded as sRGB uint8 (h, w, 4), other data
+        as uint8 codes, a normal map as float16 (neither the mips nor the sampler's bilinear weights quantise a
+        normal to 8 bits).
 
         ``normal_map``: the level-0 vectors (2 c − 1) are made unit first, so that a level's mean vector is
         shorter than 1 by how much the normals under it vary (Toksvig 2005: the GLSL widens the lobe by it)."""
@@ -154,22 +157,22 @@ class TextureData:
             flat = np.array([0.0, 0.0, 1.0], np.float32)
             unit = np.where(length > 1e-6, vectors / np.maximum(length, 1e-6), flat)
             linear = np.concatenate([unit * 0.5 + 0.5, linear[..., 3:]], axis=-1)
-        levels = [self.codes if self.srgb else linear.astype(np.float16)]
+        levels = [linear.astype(np.float16) if normal_map else self.codes]
         while linear.shape[0] > 1 or linear.shape[1] > 1:
             linear = _halve(_halve(linear, 0), 1)
-            if self.srgb:
-                encoded = linear.copy()
-                encoded[..., :3] = linear_to_srgb(np.clip(encoded[..., :3], 0.0, 1.0))
-                levels.append(np.clip(np.rint(encoded * 255.0), 0, 255).astype(np.uint8))
-            else:
+            if normal_map:
                 levels.append(linear.astype(np.float16))
+                continue
+            encoded = linear.copy()
+            if self.srgb:
+                encoded[..., :3] = linear_to_srgb(np.clip(encoded[..., :3], 0.0, 1.0))
+            levels.append(np.clip(np.rint(encoded * 255.0), 0, 255).astype(np.uint8))
         return levels
 
-    @property
-    def gpu_bytes(self) -> int:
-        """Bytes of the GPU texture with its mips (4 bytes a texel for sRGB colour, 8 for float16 data; 4/3 for the
+    def gpu_bytes(self, normal_map: bool = False) -> int:
+        """Bytes of the GPU texture with its mips (4 bytes a texel, 8 for a float16 normal map; 4/3 for the
         chain)."""
-        return int(self.codes.shape[0] * self.codes.shape[1] * (4 if self.srgb else 8) * 4 / 3)
+        return int(self.codes.shape[0] * self.codes.shape[1] * (8 if normal_map else 4) * 4 / 3)
 
 
 def _wrap(i: np.ndarray, n: int, mode: str) -> np.ndarray:
@@ -305,14 +308,17 @@ def texture_for(ctx, data: TextureData, normal_map: bool = False):
     texture = store.get(key)
     if texture is not None:
         return texture
-    kind = "sRGB8 colour" if data.srgb else "float16 data"
-    check("texture", data.gpu_bytes, value=f"{data.size[0]}x{data.size[1]}", what=f"{kind} texels and their mips")
+    kind = "float16 normal" if normal_map else "sRGB8 colour" if data.srgb else "8-bit data"
+    check("texture", data.gpu_bytes(normal_map), value=f"{data.size[0]}x{data.size[1]}",
+          what=f"{kind} texels and their mips")  # fmt: skip
     levels = data.mip_chain(normal_map)
     w, h = data.size
-    if data.srgb:
+    if normal_map:
+        texture = ctx.texture((w, h), 4, levels[0].tobytes(), dtype="f2")
+    elif data.srgb:
         texture = ctx.texture((w, h), 4, levels[0].tobytes(), internal_format=SRGB8_ALPHA8)
     else:
-        texture = ctx.texture((w, h), 4, levels[0].tobytes(), dtype="f2")
+        texture = ctx.texture((w, h), 4, levels[0].tobytes())
     texture.build_mipmaps(0, len(levels) - 1)  # allocates the chain; the levels are written next
     for level, codes in enumerate(levels[1:], start=1):
         texture.write(codes.tobytes(), level=level)

@@ -37,3 +37,38 @@ def test_every_light_type_adds_its_own_contribution():
     assert all(img[seen].max() > 0.01 for img in alone.values())
     np.testing.assert_allclose(together[seen], expected[seen], rtol=1e-5, atol=1e-6)
     assert reflets.render(scene([]), method="forward").max() == 0.0
+
+
+def test_depth_prepass_shades_the_nearest_surface_only_with_the_same_image(monkeypatch):
+    """The helmet (textured, self-occluding) in front of a textured cut-out plane, under the map with its occlusion
+    and a point light: with the depth pre-pass (the helmet's depths first, then each pixel shaded once) the image
+    is the one drawn without it, bit for bit; the cut-out mesh is left out of the pre-pass (its holes would
+    hide what is behind)."""
+    import warnings
+
+    from reflets.scene.assets import asset_path, default_environment
+    from reflets.techniques.forward import Forward
+
+    helmet = str(asset_path("DamagedHelmet/DamagedHelmet.glb"))
+    cut = {"type": "gltf", "alpha_mode": "mask", "alpha_cutoff": 0.5,
+           "base_color_texture": {"texture": helmet, "image": 0, "channels": "rgbr"}}  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = reflets.load_dict({
+            "camera": {"position": [0, 0.3, 3.2], "look_at": [0, 0, 0], "fov_y": 45, "size": [96, 72]},
+            "materials": {"cut": cut},
+            "mesh": [{"file": helmet},
+                     {"shape": "plane", "size": [3, 3], "material": "cut",
+                      "transform": {"rotate": [90, 0, 0], "translate": [0, 0, -0.7]}}],
+            "light": [{"type": "environment", "file": str(default_environment())},
+                      {"type": "point", "position": [1.5, 2.0, 3.0], "intensity": [5, 5, 5]}],
+        })  # fmt: skip
+    drawn = []
+    prepass = Forward._depth_prepass
+    monkeypatch.setattr(Forward, "_depth_prepass", lambda self, *a: drawn.append(prepass(self, *a)) or drawn[-1])
+    with_prepass = reflets.render(scene, method="forward")
+    assert drawn and drawn[0] == {0}, drawn  # the helmet only (draw 0), not the cut-out plane
+    monkeypatch.setattr(Forward, "depth_prepass", False)
+    without = reflets.render(scene, method="forward")
+    assert np.array_equal(with_prepass, without)
+    assert with_prepass.mean() > 0.01 and np.ptp(with_prepass) > 0.5  # an image, not a cleared target

@@ -119,8 +119,16 @@ def _orbit(scene: Scene, frames: int) -> list[tuple[float, float, float]]:
 
 
 #: reflets with the features Filament (filly's defaults) renders a glTF asset with: trilinear texture filtering
-#: (no anisotropy: glTF samplers have none) and the environment map unoccluded by the scene (no shadow lookups)
+#: (no anisotropy: glTF samplers have none) and the environment map unoccluded by the scene (no shadow lookups);
+#: the point light's shadows as Filament's are set (:func:`with_point_shadows`)
 AS_FILAMENT = {"texture_anisotropy": 1.0, "environment_occlusion": "none"}
+
+
+def with_point_shadows(scene: Scene, shadows: bool) -> Scene:
+    """The scene with its point lights casting shadows or not (filly's default: no shadows at all)."""
+    lights = [light.model_copy(update={"shadows": shadows}) if light.type == "point" else light
+              for light in scene.light]  # fmt: skip
+    return scene.model_copy(update={"light": lights})
 
 
 def _reflets_times(scene: Scene, positions, **params) -> dict:
@@ -140,7 +148,7 @@ def _reflets_times(scene: Scene, positions, **params) -> dict:
     return {"prepare_ms": prepare_ms, "frame_ms": frames, "image": first}
 
 
-def _filament_times(scene: Scene, path: Path, positions, image: Path | None) -> dict:
+def _filament_times(scene: Scene, path: Path, positions, image: Path | None, shadows: bool) -> dict:
     """Filament on the same file, camera path, map and point light (reflets.bench.filament, its own process)."""
     try:
         import filly  # noqa: F401
@@ -153,7 +161,7 @@ def _filament_times(scene: Scene, path: Path, positions, image: Path | None) -> 
         "asset": str(path), "size": list(scene.camera.size), "fov_y": scene.camera.fov_y,
         "look_at": list(scene.camera.look_at), "positions": [list(p) for p in positions],
         "environment": str(environment.file), "image": str(image) if image is not None else None,
-        "point_light": {"position": list(point.position), "intensity": list(point.intensity)},
+        "point_light": {"position": list(point.position), "intensity": list(point.intensity)}, "shadows": shadows,
     }  # fmt: skip
     with tempfile.TemporaryDirectory() as folder:
         job_file = Path(folder) / "job.json"
@@ -163,6 +171,14 @@ def _filament_times(scene: Scene, path: Path, positions, image: Path | None) -> 
     if done.returncode != 0:
         raise RuntimeError(f"Filament (filly) failed: {(done.stderr or done.stdout).strip()[-600:]}")
     return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def _cell(row: dict, label: str) -> str:
+    return f"{row[label]['frame_ms_median']:.1f} ({row[label]['frame_ms_p95']:.1f}) ms"
+
+
+def _ratio(row: dict, ours: str, theirs: str) -> str:
+    return f"{row[ours]['frame_ms_median'] / row[theirs]['frame_ms_median']:.2f}×"
 
 
 def bench_assets(quick: bool, out_dir) -> tuple[dict, str]:
@@ -177,17 +193,21 @@ def bench_assets(quick: bool, out_dir) -> tuple[dict, str]:
             scene = _timing_scene(path, size)
             positions = _orbit(scene, frames)
             textured = _reflets_times(scene, positions)
-            matched = _reflets_times(scene, positions, **AS_FILAMENT)
+            matched = _reflets_times(with_point_shadows(scene, False), positions, **AS_FILAMENT)
+            matched_shadows = _reflets_times(scene, positions, **AS_FILAMENT)
             untextured = _reflets_times(without_textures(scene), positions)
             stem = f"assets_{name}_{size[0]}x{size[1]}"
             shown = size == sizes[0]  # the first orbit frame of each renderer, at the first size: to look at
-            images = [result.pop("image") for result in (textured, matched, untextured)]
+            images = [result.pop("image") for result in (textured, matched, matched_shadows, untextured)]
             if shown:
                 write_image(out_dir / f"{stem}_reflets.png", images[0])
-            filament = _filament_times(scene, path, positions, out_dir / f"{stem}_filament.png" if shown else None)
+            filament = _filament_times(scene, path, positions, out_dir / f"{stem}_filament.png" if shown else None,
+                                       shadows=False)  # fmt: skip
+            filament_shadows = _filament_times(scene, path, positions, None, shadows=True)
             row = {"asset": name, "size": list(size), "frames": frames}
-            results = (("reflets", textured), ("reflets_as_filament", matched), ("reflets_untextured", untextured),
-                       ("filament", filament))  # fmt: skip
+            results = (("reflets", textured), ("reflets_as_filament", matched),
+                       ("reflets_as_filament_shadows", matched_shadows), ("reflets_untextured", untextured),
+                       ("filament", filament), ("filament_shadows", filament_shadows))  # fmt: skip
             for label, result in results:
                 times = result["frame_ms"]
                 row[label] = {"prepare_ms": result["prepare_ms"], "frame_ms_median": statistics.median(times),
@@ -195,8 +215,10 @@ def bench_assets(quick: bool, out_dir) -> tuple[dict, str]:
             row["filly"] = filament["filly"]
             rows.append(row)
             print(f"{name} {size[0]}×{size[1]}: reflets {row['reflets']['frame_ms_median']:.1f} ms (as Filament "
-                  f"{row['reflets_as_filament']['frame_ms_median']:.1f}), Filament "
-                  f"{row['filament']['frame_ms_median']:.1f} ms a frame", flush=True)  # fmt: skip
+                  f"{row['reflets_as_filament']['frame_ms_median']:.1f}, with shadows "
+                  f"{row['reflets_as_filament_shadows']['frame_ms_median']:.1f}), Filament "
+                  f"{row['filament']['frame_ms_median']:.1f} (with shadows "
+                  f"{row['filament_shadows']['frame_ms_median']:.1f}) ms a frame", flush=True)  # fmt: skip
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             from ..scene import load_scene
@@ -211,23 +233,25 @@ def bench_assets(quick: bool, out_dir) -> tuple[dict, str]:
         "file, camera path, studio map and point light. Prepare: file to first frame read back.",
         "",
         "*as Filament*: reflets with the features filly renders the asset with — trilinear texture filtering "
-        f"(`texture_anisotropy = {AS_FILAMENT['texture_anisotropy']:g}`: glTF samplers have no anisotropy) and the map "
-        "unoccluded by the scene (`environment_occlusion = \"none\"`); *reflets*: its defaults (16× anisotropic "
-        "filtering, the scene's occlusion of the map from 32 shadow views); *untextured*: the defaults, every "
-        "texture dropped (factors kept).",
+        f"(`texture_anisotropy = {AS_FILAMENT['texture_anisotropy']:g}`: glTF samplers have no anisotropy), the map "
+        "unoccluded by the scene (`environment_occlusion = \"none\"`) and no shadows (filly's default); *with "
+        "shadows*: the same, and the point light casting shadows in both renderers (Filament: `scene.shadows`, "
+        "`light.casts_shadows`); *reflets*: its defaults (16× anisotropic filtering, the scene's occlusion of the "
+        "map from 32 shadow views, the point light's shadows); *untextured*: the defaults, every texture dropped "
+        "(factors kept).",
         "",
-        "| asset | size | reflets prepare | reflets frame (p95) | as Filament (p95) | untextured | "
-        "Filament prepare | Filament frame (p95) | as Filament / Filament |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| asset | size | reflets prepare | reflets frame (p95) | untextured | as Filament (p95) | Filament (p95) | "
+        "ratio | as Filament, shadows | Filament, shadows | ratio | Filament prepare |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
-        ratio = r["reflets_as_filament"]["frame_ms_median"] / r["filament"]["frame_ms_median"]
         lines.append(
             f"| {r['asset']} | {r['size'][0]}×{r['size'][1]} | {r['reflets']['prepare_ms']:.0f} ms | "
-            f"{r['reflets']['frame_ms_median']:.1f} ({r['reflets']['frame_ms_p95']:.1f}) ms | "
-            f"{r['reflets_as_filament']['frame_ms_median']:.1f} ({r['reflets_as_filament']['frame_ms_p95']:.1f}) "
-            f"ms | {r['reflets_untextured']['frame_ms_median']:.1f} ms | {r['filament']['prepare_ms']:.0f} ms | "
-            f"{r['filament']['frame_ms_median']:.1f} ({r['filament']['frame_ms_p95']:.1f}) ms | {ratio:.2f}× |"
+            f"{_cell(r, 'reflets')} | {r['reflets_untextured']['frame_ms_median']:.1f} ms | "
+            f"{_cell(r, 'reflets_as_filament')} | {_cell(r, 'filament')} | "
+            f"{_ratio(r, 'reflets_as_filament', 'filament')} | {_cell(r, 'reflets_as_filament_shadows')} | "
+            f"{_cell(r, 'filament_shadows')} | "
+            f"{_ratio(r, 'reflets_as_filament_shadows', 'filament_shadows')} | {r['filament']['prepare_ms']:.0f} ms |"
         )
     lines += [
         "",

@@ -5,7 +5,8 @@ prints one JSON line: ``prepare_ms`` (the renderer, the scene, the file and the 
 frame read back) and ``frame_ms`` (per orbit frame: camera set, frame rendered, ``finish()``, read back into
 NumPy — what a reflets ``Renderer.render()`` returns). JOB.json: ``asset``, ``size`` [w, h], ``fov_y`` (degrees),
 ``look_at``, ``positions`` (one camera position per frame), ``environment`` (an .hdr map), ``point_light``
-{position, intensity (W/sr, radiometric)}, ``image`` (a PNG of the first frame, for the eye).
+{position, intensity (W/sr, radiometric)}, ``shadows`` (the point light casts shadows: Filament's cube shadow map;
+filly's default is none), ``image`` (a PNG of the first frame, for the eye).
 
 Filament's point light takes luminous power: Φ = 4π · 683 lm/W · mean(intensity). Its default camera exposure and
 tone mapping are kept (images are shown beside reflets', not compared numerically: the benchmark's errors are
@@ -36,7 +37,10 @@ def run(job: dict) -> dict:
         scene.environment_visible = True  # drawn behind the asset, as reflets draws it
         light = job["point_light"]
         lumens = 4.0 * math.pi * 683.0 * float(np.mean(light["intensity"]))
-        scene.add_point_light(position=light["position"], intensity=lumens, range=1e3)
+        point = scene.add_point_light(position=light["position"], intensity=lumens, range=1e3)
+        if job.get("shadows"):
+            scene.shadows = True
+            point.casts_shadows = True
         camera = renderer.create_camera()
         width, height = job["size"]
         camera.set_perspective(fov_y_deg=job["fov_y"], aspect=width / height)

@@ -133,6 +133,11 @@ class Material(BaseModel):
         """Some parameter is read from a texture (methods that integrate constant parameters cannot show it)."""
         return False
 
+    @property
+    def cutout(self) -> bool:
+        """Its GLSL twin may discard fragments (a coverage cut-out): a depth pre-pass cannot stand for it."""
+        return False
+
     #: the GLSL twin gives the split sum's albedos per fragment (``material_ibl``): no albedo curve is computed
     fragment_ibl: ClassVar[bool] = False
 

@@ -303,6 +303,10 @@ class Gltf(Material):
     # ------------------------------------------------------------------------------------------ textures
 
     @property
+    def cutout(self) -> bool:
+        return self.alpha_mode == "mask"
+
+    @property
     def textured(self) -> bool:
         return any(getattr(self, field) is not None for field, *_ in SLOTS)
 

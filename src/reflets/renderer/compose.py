@@ -40,7 +40,7 @@ from pydantic import Field
 
 from ..gpu import FrameTimer
 from ..scene.model import PolygonLight, QuadLight, Scene
-from ..techniques.base import Technique, TechniqueParams, get_technique, register_technique
+from ..techniques.base import Technique, TechniqueParams, add_frame, get_technique, register_technique
 from ..techniques.forward import (
     CASCADES_HELP,
     EnvironmentOcclusion,
@@ -262,8 +262,7 @@ class Auto(Technique):
                     if self.measure_passes:  # a finish per pass: only when asked (it costs a sync)
                         self.ctx.finish()
                         self.pass_ms[k] = 1e3 * (time.perf_counter() - start)
-            image = target.read()
-            total = image.astype(np.float64) if total is None else total + image
+            total = add_frame(total, target.read())
         self._supersample = s
         return total, n_frames
 

@@ -84,9 +84,11 @@ class Renderer:
             _, previous, first = self._accumulated
         total, frames = self._technique.accumulate(size=self.size, seed=seed, spp=spp, first_frame=first)
         if first:
-            total, frames = previous + total, first + frames
+            total, frames = np.add(previous, total, dtype=np.float64), first + frames
         self._accumulated = (key, total, frames) if self._technique.progressive else None
         image = self._technique.resolve(total, frames)
+        if image is total and self._accumulated is not None:
+            image = image.copy()  # the caller's to change: not the sum the next call adds to
         self.stats["frame_ms"] = 1e3 * (time.perf_counter() - t0)
         self.stats["frames"] = frames
         return image

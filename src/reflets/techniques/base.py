@@ -68,12 +68,13 @@ class Technique:
     def accumulate(
         self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int | None = None, first_frame: int = 0
     ) -> tuple[np.ndarray, int]:
-        """The float64 sum of the frames of ``spp`` samples, frame indices from ``first_frame``, and their count."""
+        """The sum of the frames of ``spp`` samples (:func:`add_frame`), frame indices from ``first_frame``, and
+        their count."""
         raise NotImplementedError
 
     def resolve(self, total: np.ndarray, n_frames: int) -> np.ndarray:
-        """The float32 image of an accumulated sum."""
-        return (total / n_frames).astype(np.float32)
+        """The float32 image of an accumulated sum (``total`` itself for one float32 frame)."""
+        return (total if n_frames == 1 else total / n_frames).astype(np.float32, copy=False)
 
     def set_camera(self, camera) -> bool:
         """Take a new camera without preparing again; False when the technique must prepare again."""
@@ -104,3 +105,9 @@ def get_technique(name: str) -> type[Technique]:
         hint = did_you_mean(str(name), TECHNIQUES)
         raise ArgumentError(f"unknown method '{name}'{hint}; allowed: {', '.join(sorted(TECHNIQUES))}", field="method")
     return TECHNIQUES[name]
+
+
+def add_frame(total: np.ndarray | None, image: np.ndarray) -> np.ndarray:
+    """A running sum of frames: the first frame as it is (float32: a one-frame image is not copied twice over,
+    4 ms of a 1280×720 frame), float64 from the second on (thousands of frames add without rounding)."""
+    return image if total is None else np.add(total, image, dtype=np.float64)

@@ -9,7 +9,13 @@ What it computes, exactly or not:
 - environment maps: by default the prefiltered split sum (``ibl.py``: GGX-prefiltered radiance, the irradiance
   map, each material's own specular albedo); ``environment = "grid"``: ``env_grid`` distant lights whose
   powers integrate the map exactly (diffuse-accurate, blurry for sharp lobes; not occluded by the scene);
-- the image is one sample per pixel at the pixel centre; ``spp`` = s² gives an s×s stratified supersample.
+- the image is one sample per pixel at the pixel centre; ``spp`` = s² gives an s×s stratified supersample;
+- a depth pre-pass first for textured meshes (``depth_prepass``): each of their pixels is shaded once, at the
+  nearest surface, not once per surface that covers it — same image (tested). Measured on llvmpipe (frame
+  time, persistent renderer): the helmet of ``reflets bench assets`` 34 → 26 ms, the gallery's helmet under
+  quad lights 147 → 102 ms, the water bottle 25 → 15 ms; on scenes of untextured spheres it cost up to 20 %
+  (llvmpipe shades vertices on one thread: a second pass over 150k triangles is not free), so their meshes
+  are drawn once as before.
 
 Buffer layouts (std430, vec4 each): points (position, intensity); directional (unit vector towards the
 light, irradiance); area samples (point, dA), (light normal, two_sided), (radiance, 0); environment
@@ -38,11 +44,11 @@ from ..scene.lightmask import mask_lookup
 from ..scene.meshdata import MeshData
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at
-from .base import Technique, TechniqueParams, register_technique
+from .base import Technique, TechniqueParams, add_frame, register_technique
 from .ibl import IBL_FLAGS
 from .prepared import PreparedScene
 from .shading import MaterialShading, shading_for
-from .shadows import CASCADES, SHADOW_SAMPLERS, ShadowSettings
+from .shadows import CASCADES, DEPTH_PROGRAM, SHADOW_SAMPLERS, ShadowSettings
 
 _SHADERS = "reflets/techniques/shaders/"
 #: compile-time light counts of lights.glsl (every program that includes it declares them)
@@ -62,9 +68,10 @@ LIGHT_FLAGS = (
     )
     | IBL_FLAGS
 )
+MESH_VERT = _SHADERS + "mesh.vert"
 MESH_PROGRAM = ProgramSpec(
     "forward",
-    vertex=_SHADERS + "mesh.vert",
+    vertex=MESH_VERT,
     fragment=_SHADERS + "forward.frag",
     flags=frozenset({"OUTPUT"}) | LIGHT_FLAGS,
 )
@@ -194,6 +201,11 @@ class Forward(Technique):
     #: the part of a frame this technique draws (a composed frame sets it before ``prepare``)
     role: PassRole = WHOLE_FRAME
 
+    #: depths first, then each pixel shaded once at the nearest surface (EQUAL-or-nearer, no depth writes): the
+    #: textured meshes whose program has mesh.vert's positions (the same vertex stage, ``invariant``) and no
+    #: cut-out (module docstring: where it pays)
+    depth_prepass: ClassVar[bool] = True
+
     #: GPU state shared with the other passes of a composed frame (``auto`` sets it before ``prepare``; None: the
     #: technique prepares and releases its own)
     shared: PreparedScene | None = None
@@ -277,6 +289,7 @@ class Forward(Technique):
         with the shading of its material's type, or this technique's own BRDF shading."""
         ctx = self.ctx
         shading = shading_for(material, self.shadings)
+        spec = self.program_spec if shading is None else shading.program
         if shading is None:
             program = get_program(ctx, self.program_spec, slots=self.slots(material), **self.flags(material))
             uniforms = {**material.uniforms(), **self.material_uniforms(material)}
@@ -293,7 +306,9 @@ class Forward(Technique):
         for texture in textures.values():  # shared by a context's renderers: the last one prepared sets it
             if texture.filter[0] == moderngl.LINEAR_MIPMAP_LINEAR:  # the images' (not the split-sum table)
                 texture.anisotropy = self.params.texture_anisotropy
-        return program, vao, uniforms, textures, own_textures, shading
+        early = material.textured and spec.vertex == MESH_VERT and not material.cutout and not self.role.additive
+        depth_vao = self.mesh_vertex_array(get_program(ctx, DEPTH_PROGRAM), index) if early else None
+        return program, vao, uniforms, textures, own_textures, shading, depth_vao
 
     # ------------------------------------------------------------------ how this technique shades
     def material_shadings(self, scene: Scene) -> list[MaterialShading]:
@@ -409,14 +424,13 @@ class Forward(Technique):
         for frame in range(first_frame, first_frame + n_frames):
             with self.timer.frame():
                 self._draw(target, view_proj, vp_bytes, frame, seed)
-            image = target.read()  # read-back is not part of the frame time
-            total = image.astype(np.float64) if total is None else total + image
+            total = add_frame(total, target.read())  # read-back is not part of the frame time
         self._supersample = s
         return total, n_frames
 
     def resolve(self, total: np.ndarray, n_frames: int) -> np.ndarray:
         """The image of an accumulated sum: the mean of its frames, box-filtered down by the supersampling."""
-        image = (total / n_frames).astype(np.float32)
+        image = Technique.resolve(self, total, n_frames)
         s = self._supersample
         if s > 1:
             height, width = image.shape[0] // s, image.shape[1] // s
@@ -460,9 +474,14 @@ class Forward(Technique):
         self.prepared.shadows.bind()
         if self._ibl is not None:
             self._ibl.bind()
+        draws = [draw for draw in self._draws if draw is not None]
+        early = self._depth_prepass(target, draws, vp_bytes) if self.depth_prepass else set()
         eye = view_eye(self.scene.camera)
         per_frame = {**self.frame_uniforms(frame, seed), **SHADOW_SAMPLERS, **self._light_uniforms}
-        for program, vao, uniforms, material_textures, own_textures, shading in filter(None, self._draws):
+        for k, (program, vao, uniforms, material_textures, own_textures, shading, _) in enumerate(draws):
+            if early:  # a pre-passed mesh: its depths are there, shade the nearest only
+                target.fbo.depth_mask = k not in early
+                ctx.depth_func = depth.NEARER_OR_EQUAL if k in early else depth.NEARER
             samplers = {}
             textures = {**material_textures, **own_textures}
             for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
@@ -474,6 +493,9 @@ class Forward(Technique):
                 {"u_view_proj": vp_bytes, "u_eye": eye, **uniforms, **samplers, **per_frame, **shading_frame},
             )
             vao.render()
+        if early:
+            target.fbo.depth_mask = True
+            ctx.depth_func = depth.NEARER
         if role.additive:
             ctx.disable(ctx.BLEND)
             target.fbo.depth_mask = True
@@ -501,6 +523,19 @@ class Forward(Technique):
             self._draw_background(view_proj)
             ctx.depth_func = depth.NEARER
         ctx.disable(ctx.DEPTH_TEST)
+
+    def _depth_prepass(self, target, draws: list[tuple], vp_bytes: bytes) -> set[int]:
+        """Draw the depths of the draws that allow it (colour writes off); their indices in ``draws``."""
+        early = {k for k, draw in enumerate(draws) if draw[-1] is not None}
+        if not early:
+            return early
+        program = get_program(self.ctx, DEPTH_PROGRAM)
+        set_uniforms(program, {"u_view_proj": vp_bytes})
+        target.fbo.color_mask = (False, False, False, False)
+        for k in early:
+            draws[k][-1].render()
+        target.fbo.color_mask = (True, True, True, True)
+        return early
 
     def _draw_background(self, view_proj: np.ndarray) -> None:
         """The environment map along every camera ray (a full-screen triangle at the far plane)."""

@@ -10,6 +10,7 @@ out vec3 v_position;
 out vec3 v_normal;
 out vec4 v_tangent;
 out vec2 v_uv;
+invariant gl_Position;  // the depth pre-pass and the shading pass must rasterise the same depths
 
 void main() {
     v_position = in_position;
