@@ -79,6 +79,31 @@ def test_emissive_strength_and_unsupported_extensions():
     assert any("KHR_materials_anisotropy not supported" in line for line in said)
 
 
+def test_sheen_read_with_its_textures_and_no_warning():
+    """KHR_materials_sheen (tools/make_sheen_test.py): factors, the colour texture decoded as sRGB colour, the
+    roughness texture read in A; the clear coat beside it; nothing said about either."""
+    scene, said = load(ASSETS / "SheenTest" / "SheenTest.gltf")
+    assert not said, said
+    velvet = scene.materials["SheenTest/velvet"]
+    assert velvet.sheen_color == pytest.approx((1.0, 0.3, 0.4)) and velvet.sheen_roughness == pytest.approx(0.3)
+    textured = scene.materials["SheenTest/textured sheen"]
+    assert textured.sheen_color_texture is not None and textured.sheen_roughness_texture is not None
+    from PIL import Image
+
+    image = np.asarray(Image.open(ASSETS / "SheenTest" / "sheen.png"))  # mesh uv (u, v): image (row 64 (1 − v), u)
+    points = textured.at(np.array([[0.1, 0.5], [0.9, 0.02]]))
+    assert points.sheen[0] == pytest.approx(_linear(image[32, 6, :3]), abs=2e-3)  # RGB, sRGB-decoded
+    assert points.sheen_roughness[1] == pytest.approx(image[62, 57, 3] / 255.0, abs=0.02)  # A, linear
+    coated = scene.materials["SheenTest/coated sheen"]
+    assert coated.sheened and coated.clearcoat == pytest.approx(0.5)
+
+
+def _linear(codes):
+    from reflets.imageio import srgb_to_linear
+
+    return srgb_to_linear(np.asarray(codes, np.float64) / 255.0)
+
+
 def test_texture_transform_read():
     scene, _ = load(ASSETS / "TextureTransformTest" / "TextureTransformTest.gltf")
     transforms = [m.base_color_texture.transform for m in scene.materials.values() if m.base_color_texture]

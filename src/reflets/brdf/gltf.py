@@ -24,6 +24,18 @@ cosine (n_c·l), like Khronos' sample viewer; the renderers multiply f by the ba
 layering weighs the base by 1 − c F_c at the view direction only: a coated material is not reciprocal (the
 extension's, like Appendix B's energy excess).
 
+KHR_materials_sheen lays a fabric's back-scattering sheen over the base (under the coat), as the extension defines it:
+
+    f_sheened = C · D_s V_s + f · min(1 − max(C) E(n·v), 1 − max(C) E(n·l))
+
+with C = ``sheen_color`` (× RGB of ``sheen_color_texture``, sRGB), D_s the "Charlie" distribution (Conty Estevez &
+Kulla 2017) of α_s = ``sheen_roughness``² (× A of ``sheen_roughness_texture``; roughness at least 0.07, as Khronos'
+sample viewer and three.js clamp it), V_s its fitted Smith visibility (the extension's "Charlie" λ, not Ashikhmin's
+approximation), no Fresnel, and E(μ) the sheen lobe's directional albedo (the fourth channel of the split-sum
+table, :func:`ibl_table`; both renderers interpolate the same table) — the albedo-scaling layering in its
+reciprocal form. Erratum of the extension's text: with its λ, E exceeds 1 at grazing angles for smooth sheens (E =
+2.2 at n·v = 1/64, roughness 0.07; 0.85 at 1/16), which would make the scaling negative; it is clamped at 0.
+
 Both renderers evaluate the textures first into per-point parameters and then the unchanged BRDF: GLSL through
 ``material_surface`` (``glsl/gltf.glsl``), NumPy through :meth:`Gltf.at` (a :class:`GltfPoints` of arrays).
 """
@@ -56,7 +68,12 @@ SLOTS = (
     ("clearcoat_texture", "m_clearcoat_map", False, "BRDF_GLTF_COAT_MAP"),
     ("clearcoat_roughness_texture", "m_clearcoat_roughness_map", False, "BRDF_GLTF_COAT_ROUGHNESS_MAP"),
     ("clearcoat_normal_texture", "m_clearcoat_normal_map", False, "BRDF_GLTF_COAT_NORMAL_MAP"),
+    ("sheen_color_texture", "m_sheen_color_map", True, "BRDF_GLTF_SHEEN_MAP"),
+    ("sheen_roughness_texture", "m_sheen_roughness_map", False, "BRDF_GLTF_SHEEN_ROUGHNESS_MAP"),
 )
+#: the smallest sheen roughness rendered (Khronos' sample viewer and three.js clamp it there: below, the Charlie
+#: lobe is a needle at grazing half vectors)
+MIN_SHEEN_ROUGHNESS = 0.07
 #: the clear coat's Fresnel reflectance at normal incidence (η = 1.5)
 COAT_F0 = 0.04
 
@@ -74,14 +91,29 @@ class GltfPoints:
     coat: np.ndarray | None = None  # (N,) clear coat weight; None: no coat
     coat_alpha: np.ndarray | None = None  # (N,)
     coat_normal: np.ndarray | None = None  # (N, 3) in the shading frame (unit)
+    sheen: np.ndarray | None = None  # (N, 3) sheen colour; None: no sheen
+    sheen_roughness: np.ndarray | None = None  # (N,), at least MIN_SHEEN_ROUGHNESS
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         value = self._base_eval(wo, wi)
+        if self.sheen is not None:
+            value = self._sheened(value, wo, wi)
         if self.coat is None:
             return value
         coat_fresnel, lobe = self._coat(wo, wi)
         weight = (self.coat * coat_fresnel)[..., None]
         return (1.0 - weight) * value + weight * lobe[..., None]
+
+    def _sheened(self, base: np.ndarray, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        """C D_s V_s + base · min(1 − max(C) E(n·v), 1 − max(C) E(n·l)) above the surface (module docstring)."""
+        wo, wi = np.asarray(wo, np.float64), np.asarray(wi, np.float64)
+        r = np.broadcast_to(self.sheen_roughness, wo.shape[:-1])
+        nv, nl = wo[..., 2], wi[..., 2]
+        up = (nv > 0) & (nl > 0)
+        peak = np.max(self.sheen, axis=-1)
+        scaling = np.maximum(np.minimum(1.0 - peak * sheen_albedo(nv, r), 1.0 - peak * sheen_albedo(nl, r)), 0.0)
+        lobe = charlie_d(_normalize(wo + wi)[..., 2], r * r) * sheen_visibility(nv, nl, r * r)
+        return np.where(up[..., None], self.sheen * lobe[..., None] + base * scaling[..., None], 0.0)
 
     def _coat(self, wo: np.ndarray, wi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """F_c at wo and the coat lobe D_c V_c (n_c·l) / (n·l) (zero unless wo, wi are above both surfaces)."""
@@ -118,9 +150,12 @@ class GltfPoints:
 
     def _specular_probability(self) -> np.ndarray:
         """The chance of sampling the GGX lobe: its normal-incidence weight against the diffuse one."""
-        lum = self.base @ np.array([0.2126, 0.7152, 0.0722])
+        luminance = np.array([0.2126, 0.7152, 0.0722])
+        lum = self.base @ luminance
         specular = (1.0 - self.metallic) * DIELECTRIC_F0 + self.metallic * lum
         diffuse = (1.0 - self.metallic) * (1.0 - DIELECTRIC_F0) * lum
+        if self.sheen is not None:  # the sheen's broad lobe: sampled by the cosine-weighted directions
+            diffuse = diffuse + self.sheen @ luminance
         total = specular + diffuse
         return np.where(total > 0, np.maximum(specular / np.where(total > 0, total, 1.0), 0.1), 1.0)
 
@@ -223,6 +258,8 @@ class Gltf(Material):
     clearcoat, clearcoat_texture : the clear coat's weight (× R; KHR_materials_clearcoat; default 0: none).
     clearcoat_roughness, clearcoat_roughness_texture : its roughness (× G); α_c = roughness² (at least 1e-3).
     clearcoat_normal_texture, clearcoat_normal_scale : its own tangent-space normal map (else the geometric normal).
+    sheen_color, sheen_color_texture : the sheen's colour (× RGB, sRGB; KHR_materials_sheen; default 0: none).
+    sheen_roughness, sheen_roughness_texture : its roughness (× A; at least 0.07).
     alpha_mode : "opaque" (default), "mask" (coverage < alpha_cutoff is a hole) or "blend".
     """
 
@@ -248,6 +285,10 @@ class Gltf(Material):
     clearcoat_roughness_texture: TextureRef | None = None
     clearcoat_normal_texture: TextureRef | None = None
     clearcoat_normal_scale: Annotated[float, Field(ge=-100, le=100, allow_inf_nan=False)] = 1.0
+    sheen_color: tuple[Unit, Unit, Unit] = (0.0, 0.0, 0.0)
+    sheen_color_texture: TextureRef | None = None
+    sheen_roughness: Unit = 0.0
+    sheen_roughness_texture: TextureRef | None = None
     alpha_mode: Literal["opaque", "mask", "blend"] = "opaque"
     alpha_cutoff: Unit = 0.5
     double_sided: bool = Field(False, description="glTF's flag (reflets shades both sides of every surface)")
@@ -268,7 +309,15 @@ class Gltf(Material):
             points.coat = np.full(shape, float(self.clearcoat))
             points.coat_alpha = np.full(shape, max(self.clearcoat_roughness**2, MIN_ALPHA))
             points.coat_normal = np.broadcast_to(np.array([0.0, 0.0, 1.0]), (*shape, 3))
+        if self.sheened:
+            points.sheen = np.broadcast_to(np.asarray(self.sheen_color, np.float64), (*shape, 3))
+            points.sheen_roughness = np.full(shape, max(float(self.sheen_roughness), MIN_SHEEN_ROUGHNESS))
         return points
+
+    @property
+    def sheened(self) -> bool:
+        """A sheen layer (the extension: a zero sheen colour factor disables it, whatever the texture)."""
+        return any(c > 0 for c in self.sheen_color)
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         wo, wi = np.broadcast_arrays(np.asarray(wo, np.float64), np.asarray(wi, np.float64))
@@ -344,6 +393,16 @@ class Gltf(Material):
         points = GltfPoints(base=base, metallic=metallic, alpha=np.maximum(roughness * roughness, MIN_ALPHA))
         if self.clearcoat > 0:
             self._coat_at(points, uv, frames)
+        if self.sheened:
+            sheen = np.tile(np.asarray(self.sheen_color, np.float64), (n, 1))
+            roughness = np.full(n, float(self.sheen_roughness))
+            texels = self._lookup("sheen_color_texture", uv)
+            if texels is not None:
+                sheen = sheen * texels[:, :3]
+            texels = self._lookup("sheen_roughness_texture", uv)
+            if texels is not None:
+                roughness = roughness * texels[:, 3]
+            points.sheen, points.sheen_roughness = sheen, np.maximum(roughness, MIN_SHEEN_ROUGHNESS)
         return points
 
     def _coat_at(self, points: GltfPoints, uv: np.ndarray, frames) -> None:
@@ -389,6 +448,7 @@ class Gltf(Material):
         return {flag: int(getattr(self, field) is not None) for field, _, _, flag in SLOTS} | {
             "BRDF_GLTF_MASK": int(self.alpha_mode == "mask"),
             "BRDF_GLTF_COAT": int(self.clearcoat > 0),
+            "BRDF_GLTF_SHEEN": int(self.sheened),
         }
 
     def uniforms(self) -> dict[str, object]:
@@ -401,6 +461,7 @@ class Gltf(Material):
             "m_alpha_cutoff": float(self.alpha_cutoff),
             "m_clearcoat": (float(self.clearcoat), float(self.clearcoat_roughness)),
             "m_clearcoat_normal_scale": float(self.clearcoat_normal_scale),
+            "m_sheen": (*(float(c) for c in self.sheen_color), float(self.sheen_roughness)),
         }
         for field, sampler, _, _ in SLOTS:
             ref = getattr(self, field)
@@ -434,15 +495,76 @@ def perturbed_frame(frame: np.ndarray, local_normal: np.ndarray) -> np.ndarray:
     return np.stack([new_t, sign * np.cross(new_n, new_t), new_n], axis=-1)
 
 
+def charlie_d(cos_h: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """The "Charlie" sheen distribution (2 + 1/α) sin^(1/α) θ_h / 2π (Conty Estevez & Kulla 2017)."""
+    sin2 = np.clip(1.0 - cos_h * cos_h, 0.0, 1.0)
+    return (2.0 + 1.0 / alpha) * sin2 ** (0.5 / alpha) / (2.0 * np.pi)
+
+
+def _sheen_l(x: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """The fitted exponent of the Charlie Smith λ (KHR_materials_sheen's table, interpolated in (1 − α)²)."""
+    t = (1.0 - alpha) ** 2
+    a, b, c = 21.5473 + (25.3245 - 21.5473) * t, 3.82987 + (3.32435 - 3.82987) * t, 0.19823 + (0.16801 - 0.19823) * t
+    d, e = -1.97760 + (-1.27393 + 1.97760) * t, -4.32054 + (-4.85967 + 4.32054) * t
+    return a / (1.0 + b * np.abs(x) ** c) + d * x + e
+
+
+def sheen_visibility(nv: np.ndarray, nl: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """V_s = 1 / ((1 + λ(n·v) + λ(n·l)) 4 n·v n·l), λ(μ) = exp(l(μ)) below ½, exp(2 l(½) − l(1 − μ)) above."""
+
+    def lam(mu):
+        return np.where(np.abs(mu) < 0.5, np.exp(_sheen_l(mu, alpha)),
+                        np.exp(2.0 * _sheen_l(np.full_like(mu, 0.5), alpha) - _sheen_l(1.0 - mu, alpha)))  # fmt: skip
+
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return np.nan_to_num(1.0 / ((1.0 + lam(nv) + lam(nl)) * (4.0 * nv * nl)), posinf=0.0)
+
+
+def sheen_albedo(mu: np.ndarray, roughness: np.ndarray) -> np.ndarray:
+    """E(μ): the sheen lobe's directional albedo (C = 1) at μ = n·v and the sheen roughness, interpolated
+    bilinearly in the split-sum table's fourth channel exactly as the GPU's sampler does (texel centres at
+    (k + ½) / size, clamped at the edges)."""
+    table = ibl_table_cached()[..., 3]
+    size = table.shape[0]
+    x = np.clip(np.asarray(mu, np.float64) * size - 0.5, 0.0, size - 1.0)
+    y = np.clip(np.asarray(roughness, np.float64) * size - 0.5, 0.0, size - 1.0)
+    x0, y0 = np.minimum(np.floor(x).astype(int), size - 2), np.minimum(np.floor(y).astype(int), size - 2)
+    fx, fy = x - x0, y - y0
+    top = table[y0, x0] * (1 - fx) + table[y0, x0 + 1] * fx
+    bottom = table[y0 + 1, x0] * (1 - fx) + table[y0 + 1, x0 + 1] * fx
+    return top * (1 - fy) + bottom * fy
+
+
+def sheen_albedo_table(size: int = 32, side: int = 256) -> np.ndarray:
+    """(roughness, μ) E = ∫ D_s V_s cos θ_l dω_l at the table's nodes, by the midpoint rule over (cos θ_l, φ_l)
+    (side² points; the lobe is smooth in both, peaked only towards grazing for the smallest roughness)."""
+    nodes = (np.arange(size) + 0.5) / size
+    t = (np.arange(side) + 0.5) / side
+    mu_l, phi = (a.ravel() for a in np.meshgrid(t, np.pi * t, indexing="ij"))  # φ in [0, π]: symmetric
+    sin_l = np.sqrt(1.0 - mu_l * mu_l)
+    wi = np.stack([sin_l * np.cos(phi), sin_l * np.sin(phi), mu_l], axis=-1)
+    weight = 2.0 * np.pi / (side * side)  # dω = dμ dφ over [0, 1] × [0, 2π]
+    out = np.zeros((size, size))
+    for j, mu in enumerate(nodes):
+        wo = np.array([np.sqrt(1.0 - mu * mu), 0.0, mu])
+        cos_h = _normalize(wo + wi)[:, 2]
+        for i, roughness in enumerate(nodes):
+            alpha = max(roughness, MIN_SHEEN_ROUGHNESS) ** 2
+            f = charlie_d(cos_h, alpha) * sheen_visibility(np.full_like(mu_l, mu), mu_l, alpha)
+            out[i, j] = weight * np.sum(f * mu_l)
+    return out
+
+
 #: the split-sum table: IBL_TABLE_SIZE nodes of μ = n·v and of roughness, each at (k + ½) / size (texel centres)
 IBL_TABLE_SIZE = 32
 IBL_TABLE_SAMPLES = 64  # per side of a stratified grid: 4096 samples per node
 
 
 def ibl_table(size: int = IBL_TABLE_SIZE, side: int = IBL_TABLE_SAMPLES) -> np.ndarray:
-    """(roughness, μ, 3) float32: A = ∫ D V cos (1 − s) dω, B = ∫ D V cos s dω (s = (1 − v·h)⁵), so that the GGX
+    """(roughness, μ, 4) float32: A = ∫ D V cos (1 − s) dω, B = ∫ D V cos s dω (s = (1 − v·h)⁵), so that the GGX
     lobe's albedo with Schlick's F₀ is F₀ A + B, and P = (1/π) ∫ s cos dω, the dielectric's Fresnel-weighted share
-    of its diffuse lobe — by stratified importance sampling (visible normals for A, B; cosine for P)."""
+    of its diffuse lobe — by stratified importance sampling (visible normals for A, B; cosine for P); and E, the
+    sheen lobe's albedo (:func:`sheen_albedo_table`; the roughness axis is then the sheen roughness)."""
     from .base import sample_cosine
 
     t = (np.arange(side) + 0.5) / side
@@ -466,10 +588,21 @@ def ibl_table(size: int = IBL_TABLE_SIZE, side: int = IBL_TABLE_SAMPLES) -> np.n
             weight = np.where(up, g2 / g1, 0.0)
             s = (1.0 - np.clip(np.sum(wo * h, axis=-1), 0.0, 1.0)) ** 5
             out[i, j] = (np.mean(weight * (1.0 - s)), np.mean(weight * s), p_mean)
-    return out.astype(np.float32)
+    return np.concatenate([out, sheen_albedo_table(size)[..., None]], axis=-1).astype(np.float32)
 
 
 IBL_TABLES = Cache("gltf-ibl", lambda path: np.load(path)["table"], lambda table, path: np.savez(path, table=table))
+
+
+_TABLE: list[np.ndarray] = []
+
+
+def ibl_table_cached() -> np.ndarray:
+    """The split-sum table of this BRDF's source (computed once, then from the on-disk cache)."""
+    if not _TABLE:
+        key = f"{IBL_TABLE_SIZE}-{IBL_TABLE_SAMPLES}-{source_hash(Path(__file__))}"  # a changed BRDF: made again
+        _TABLE.append(IBL_TABLES.get(key, ibl_table))
+    return _TABLE[0]
 
 
 def ibl_table_texture(ctx):
@@ -480,9 +613,8 @@ def ibl_table_texture(ctx):
 
     store = context_store(ctx, "gltf-ibl")
     if "table" not in store:
-        key = f"{IBL_TABLE_SIZE}-{IBL_TABLE_SAMPLES}-{source_hash(Path(__file__))}"  # a changed BRDF: made again
-        table = IBL_TABLES.get(key, ibl_table)
-        texture = ctx.texture((table.shape[1], table.shape[0]), 3, np.ascontiguousarray(table).tobytes(), dtype="f4")
+        table = ibl_table_cached()
+        texture = ctx.texture((table.shape[1], table.shape[0]), 4, np.ascontiguousarray(table).tobytes(), dtype="f4")
         texture.filter = (moderngl.LINEAR, moderngl.LINEAR)
         texture.repeat_x = texture.repeat_y = False
         store["table"] = texture

@@ -11,8 +11,9 @@ What becomes what (docs/assets.md has the full table):
   :meth:`GltfFile.instances` order, named after the node; the file's world transform is baked into the part's
   vertices (reflets' meshes are stored in world space), the parsed file and its accessors are shared;
 - materials → ``type = "gltf"`` (Appendix B) with their textures (``TextureRef``: the glTF file and the image
-  index, the sampler's wrap modes and filter, ``KHR_texture_transform``), ``KHR_materials_emissive_strength``;
-  any other material extension → a warning naming it (its base material is rendered);
+  index, the sampler's wrap modes and filter, ``KHR_texture_transform``), ``KHR_materials_emissive_strength``,
+  ``KHR_materials_clearcoat``, ``KHR_materials_sheen``; any other material extension → a warning naming it (its
+  base material is rendered);
 - cameras → ``Camera`` (perspective, or orthographic with ``ortho_height`` = 2 ymag and the aspect xmag / ymag;
   ``--camera K`` picks one; default the first, else one framing the bounding box);
 - ``KHR_lights_punctual`` → point / directional lights, photometric units converted to radiometric ones at
@@ -42,7 +43,8 @@ ASSET_EXTENSIONS = (".gltf", ".glb", ".obj")
 #: lumens per watt of 555 nm light: photometric glTF light units → reflets' radiometric ones
 LUMINOUS_EFFICACY = 683.0
 #: material extensions read into the ``gltf`` material
-SUPPORTED_MATERIAL_EXTENSIONS = {"KHR_materials_emissive_strength", "KHR_texture_transform", "KHR_materials_clearcoat"}
+SUPPORTED_MATERIAL_EXTENSIONS = {"KHR_materials_emissive_strength", "KHR_texture_transform", "KHR_materials_clearcoat",
+                                 "KHR_materials_sheen"}  # fmt: skip
 WRAPS = {10497: "repeat", 33071: "clamp", 33648: "mirror"}
 NEAREST_FILTERS = {9728, 9984, 9986}  # NEAREST, NEAREST_MIPMAP_NEAREST, NEAREST_MIPMAP_LINEAR (mag / min)
 
@@ -193,6 +195,8 @@ def _material(gltf: GltfFile, index: int, warnings: list[str], left_out: dict[st
     if "KHR_materials_clearcoat" in extensions:
         out |= _clearcoat(gltf, extensions["KHR_materials_clearcoat"], f"{where}.extensions.KHR_materials_clearcoat",
                           warnings)  # fmt: skip
+    if "KHR_materials_sheen" in extensions:
+        out |= _sheen(gltf, extensions["KHR_materials_sheen"], f"{where}.extensions.KHR_materials_sheen", warnings)
     mode = (m.alphaMode or "OPAQUE").lower()
     out["alpha_mode"] = mode if mode in ("opaque", "mask", "blend") else "opaque"
     if m.alphaCutoff is not None:
@@ -209,15 +213,16 @@ def _material(gltf: GltfFile, index: int, warnings: list[str], left_out: dict[st
     return {key: value for key, value in out.items() if value is not None}
 
 
-def _clearcoat(gltf: GltfFile, coat, where: str, warnings: list[str]) -> dict:
-    """KHR_materials_clearcoat's factors and textures (raw JSON: its textureInfo objects are dicts)."""
+def _extension_textures(gltf: GltfFile, extension, where: str):
+    """A material extension's textureInfo reader (raw JSON: its textureInfo objects are dicts), once the extension
+    is known to be an object."""
     from types import SimpleNamespace
 
-    if not isinstance(coat, dict):
+    if not isinstance(extension, dict):
         raise SceneError(f"{where}: must be an object", file=gltf.path)
 
     def info(key: str):
-        value = coat.get(key)
+        value = extension.get(key)
         if value is None:
             return None
         if not isinstance(value, dict):
@@ -225,6 +230,12 @@ def _clearcoat(gltf: GltfFile, coat, where: str, warnings: list[str]) -> dict:
         return SimpleNamespace(index=value.get("index"), texCoord=value.get("texCoord"),
                                extensions=value.get("extensions"), scale=value.get("scale"))  # fmt: skip
 
+    return info
+
+
+def _clearcoat(gltf: GltfFile, coat, where: str, warnings: list[str]) -> dict:
+    """KHR_materials_clearcoat's factors and textures."""
+    info = _extension_textures(gltf, coat, where)
     out = {
         "clearcoat": coat.get("clearcoatFactor", 0.0),
         "clearcoat_roughness": coat.get("clearcoatRoughnessFactor", 0.0),
@@ -237,6 +248,18 @@ def _clearcoat(gltf: GltfFile, coat, where: str, warnings: list[str]) -> dict:
         out["clearcoat_normal_texture"] = _texture(gltf, normal, where + ".clearcoatNormalTexture", warnings)
         out["clearcoat_normal_scale"] = 1.0 if normal.scale is None else normal.scale
     return out
+
+
+def _sheen(gltf: GltfFile, sheen, where: str, warnings: list[str]) -> dict:
+    """KHR_materials_sheen's factors and textures (colour in RGB, sRGB; roughness in A)."""
+    info = _extension_textures(gltf, sheen, where)
+    return {
+        "sheen_color": sheen.get("sheenColorFactor", (0.0, 0.0, 0.0)),
+        "sheen_roughness": sheen.get("sheenRoughnessFactor", 0.0),
+        "sheen_color_texture": _texture(gltf, info("sheenColorTexture"), where + ".sheenColorTexture", warnings),
+        "sheen_roughness_texture": _texture(gltf, info("sheenRoughnessTexture"), where + ".sheenRoughnessTexture",
+                                            warnings),  # fmt: skip
+    }
 
 
 def _basis(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

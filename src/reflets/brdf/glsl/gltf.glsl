@@ -1,7 +1,8 @@
 // Provides brdf_eval(wo, wi) for glTF 2.0's metallic-roughness material (twin of reflets/brdf/gltf.py), and the
 // per-fragment hooks a textured material offers every shading pass (forward.frag, arealight.frag, lights.glsl):
 // material_surface(uv, frame) reads the textures into the parameters brdf_eval uses and applies the normal map;
-// material_emission(), material_occlusion(), material_coverage(), material_ibl(mu, ...).
+// material_emission(), material_occlusion(), material_coverage(), material_ibl(mu, ...). Layers: the sheen
+// (BRDF_GLTF_SHEEN) over the base, the clear coat (BRDF_GLTF_COAT) over both.
 #define MATERIAL_SURFACE 1
 #define MATERIAL_IBL 1
 
@@ -49,7 +50,18 @@ uniform mat3 m_clearcoat_roughness_map_uv;
 uniform sampler2D m_clearcoat_normal_map;
 uniform mat3 m_clearcoat_normal_map_uv;
 #endif
-// the split sum's tables of this BRDF (reflets/brdf/gltf_ibl.py): (A, B, P) at (mu, roughness)
+#if BRDF_GLTF_SHEEN
+uniform vec4 m_sheen;                // KHR_materials_sheen: colour and roughness factors
+#endif
+#if BRDF_GLTF_SHEEN_MAP
+uniform sampler2D m_sheen_color_map;
+uniform mat3 m_sheen_color_map_uv;
+#endif
+#if BRDF_GLTF_SHEEN_ROUGHNESS_MAP
+uniform sampler2D m_sheen_roughness_map;
+uniform mat3 m_sheen_roughness_map_uv;
+#endif
+// the split sum's table of this BRDF (reflets/brdf/gltf.py, ibl_table): (A, B, P, E_sheen) at (mu, roughness)
 uniform sampler2D m_ibl_lut;
 
 // the parameters at this fragment (material_surface sets them)
@@ -64,6 +76,8 @@ float g_coat_alpha = 1.0;
 vec3 g_coat_n = vec3(0.0, 0.0, 1.0);
 float g_coat_normal_variance = 0.0;
 float g_normal_variance = 0.0;  // of the normal map under the footprint (Toksvig), added to alpha^2
+vec3 g_sheen = vec3(0.0);            // the sheen: colour and roughness (at least 0.07, as gltf.py)
+float g_sheen_roughness = 0.07;
 
 vec4 gltf_texel(sampler2D map, mat3 to_image, vec2 uv) {
     return texture(map, (to_image * vec3(uv, 1.0)).xy);
@@ -123,7 +137,48 @@ void material_surface(vec2 uv, inout mat3 frame) {
 #if BRDF_GLTF_COAT
     g_coat_n = normalize(transpose(frame) * coat_world);
 #endif
+#if BRDF_GLTF_SHEEN
+    g_sheen = m_sheen.rgb;
+    g_sheen_roughness = m_sheen.a;
+#if BRDF_GLTF_SHEEN_MAP
+    g_sheen *= gltf_texel(m_sheen_color_map, m_sheen_color_map_uv, uv).rgb;
+#endif
+#if BRDF_GLTF_SHEEN_ROUGHNESS_MAP
+    g_sheen_roughness *= gltf_texel(m_sheen_roughness_map, m_sheen_roughness_map_uv, uv).a;
+#endif
+    g_sheen_roughness = max(g_sheen_roughness, 0.07);
+#endif
 }
+
+#if BRDF_GLTF_SHEEN
+// the sheen lobe's albedo E at mu = n.v (the table's fourth channel, at the sheen roughness: gltf.py's
+// sheen_albedo interpolates the same texels)
+float gltf_sheen_albedo(float mu) {
+    return textureLod(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), g_sheen_roughness), 0.0).a;
+}
+
+// KHR_materials_sheen's fitted exponent of the Charlie lambda, and lambda itself
+float gltf_sheen_l(float x, float alpha) {
+    float t = (1.0 - alpha) * (1.0 - alpha);
+    float a = mix(21.5473, 25.3245, t), b = mix(3.82987, 3.32435, t), c = mix(0.19823, 0.16801, t);
+    float d = mix(-1.97760, -1.27393, t), e = mix(-4.32054, -4.85967, t);
+    return a / (1.0 + b * pow(abs(x), c)) + d * x + e;
+}
+float gltf_sheen_lambda(float mu, float alpha) {
+    return abs(mu) < 0.5 ? exp(gltf_sheen_l(mu, alpha)) : exp(2.0 * gltf_sheen_l(0.5, alpha) - gltf_sheen_l(1.0 - mu, alpha));
+}
+
+// C D_s V_s + f min(1 - max(C) E(n.v), 1 - max(C) E(n.l)) (gltf.py's module docstring; wo, wi above the surface)
+vec3 gltf_sheened(vec3 f, vec3 wo, vec3 wi, vec3 h) {
+    float alpha = g_sheen_roughness * g_sheen_roughness;
+    float peak = max(g_sheen.r, max(g_sheen.g, g_sheen.b));
+    float scaling = max(min(1.0 - peak * gltf_sheen_albedo(wo.z), 1.0 - peak * gltf_sheen_albedo(wi.z)), 0.0);
+    float sin2 = clamp(1.0 - h.z * h.z, 0.0, 1.0);
+    float d = (2.0 + 1.0 / alpha) * pow(sin2, 0.5 / alpha) / (2.0 * PI);
+    float v = 1.0 / ((1.0 + gltf_sheen_lambda(wo.z, alpha) + gltf_sheen_lambda(wi.z, alpha)) * (4.0 * wo.z * wi.z));
+    return g_sheen * (d * v) + f * scaling;
+}
+#endif
 
 // Specular anti-aliasing: a pixel averages the lobe over the normals its footprint spans. On a near-mirror
 // (roughness 0: alpha = 1e-3) a point light's highlight is a sub-pixel needle that a few samples per pixel hit or
@@ -175,12 +230,21 @@ bool material_covered() {
 // The environment's split sum for this BRDF: its specular directional albedo F0 A + B (Schlick: F0 mixes 0.04 and
 // the base colour by metallic) and the dielectric's diffuse albedo (1 - m) c 0.96 (1 - P), P = the mean of
 // (1 - v.h)^5 over the cosine-weighted hemisphere, both from the table at mu = n.v and the roughness.
+// A sheen scales both by 1 - max(C) E(mu) (the extension's simplified form for the environment) and adds its own
+// albedo C E(mu) to the diffuse one: its broad lobe lit by the irradiance (an approximation: the lobe leans to
+// grazing angles where the irradiance map's cosine does not; docs/assets.md measures it).
 void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, out float alpha) {
     vec3 abp = texture(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), sqrt(g_alpha))).rgb;
     vec3 f0 = mix(vec3(0.04), g_base, g_metallic);
     specular_albedo = f0 * abp.x + abp.y;
     diffuse_albedo = (1.0 - g_metallic) * g_base * 0.96 * (1.0 - abp.z);
     alpha = g_alpha;
+#if BRDF_GLTF_SHEEN
+    float sheen_albedo = gltf_sheen_albedo(mu);
+    float scaling = max(1.0 - max(g_sheen.r, max(g_sheen.g, g_sheen.b)) * sheen_albedo, 0.0);
+    specular_albedo *= scaling;
+    diffuse_albedo = diffuse_albedo * scaling + g_sheen * sheen_albedo;
+#endif
 }
 
 #if BRDF_GLTF_COAT
@@ -229,6 +293,9 @@ vec3 brdf_eval(vec3 wo, vec3 wi) {
     float f_d = 0.04 + 0.96 * schlick;
     vec3 f_m = g_base + (1.0 - g_base) * schlick;
     vec3 value = (1.0 - g_metallic) * ((1.0 - f_d) * g_base * INV_PI + f_d * dv) + g_metallic * f_m * dv;
+#if BRDF_GLTF_SHEEN
+    value = gltf_sheened(value, wo, wi, h);
+#endif
 #if BRDF_GLTF_COAT
     float weight = g_coat * (0.04 + 0.96 * pow(1.0 - clamp(abs(dot(g_coat_n, wo)), 0.0, 1.0), 5.0));
     value = (1.0 - weight) * value + weight * gltf_coat_lobe(wo, wi);
