@@ -427,6 +427,13 @@ class Gltf(Material):
         points.coat, points.coat_alpha = coat, np.maximum(roughness * roughness, MIN_ALPHA)
         points.coat_normal = normal
 
+    def coverage(self, uv: np.ndarray) -> np.ndarray:
+        """Coverage (N,) at mesh uv: the base colour's alpha × its texture's (alpha_mode "mask" cuts below
+        ``alpha_cutoff``; the references let rays through there)."""
+        alpha = np.full(len(uv), float(self.base_color[3]))
+        texels = self._lookup("base_color_texture", uv)
+        return alpha if texels is None else alpha * texels[:, 3]
+
     def emission(self, uv: np.ndarray) -> np.ndarray:
         """Emitted radiance (N, 3) at mesh uv."""
         out = np.broadcast_to(np.asarray(self.emissive, np.float64) * self.emissive_strength, (len(uv), 3)).copy()

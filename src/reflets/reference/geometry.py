@@ -2,7 +2,9 @@
 
 The reference sees exactly the triangles the GPU draws (``reflets.scene.geometry.mesh_data``) plus the
 area-light polygons (emitters are visible and occlude, as in Mitsuba). Embree intersects in float32; hit
-points, normals and tangents are then rebuilt in float64 from the barycentrics.
+points, normals and tangents are then rebuilt in float64 from the barycentrics. A cut-out material's holes (glTF
+alphaMode MASK: coverage under the cut-off) let rays through: a ray that hits one goes on from just past it
+(:data:`MAX_CUTOUT_LAYERS` times at most), shadow rays likewise.
 """
 
 from __future__ import annotations
@@ -16,6 +18,8 @@ from ..scene.geometry import bounding_sphere, mesh_data
 from ..scene.model import PolygonLight, QuadLight, Scene
 
 MESHES, EMITTERS = 0, 1  # Embree geometry ids
+#: holes a ray may pass through before the rest is taken as blocked (foliage cards stack a few deep)
+MAX_CUTOUT_LAYERS = 64
 
 
 def _embree():
@@ -68,6 +72,8 @@ class SceneGeometry:
             meshes.append(np.full(data.n_triangles, index))
             offset += data.n_vertices
         self.material_names = names
+        #: material index → the cut-out material (its holes let rays through)
+        self._cutouts = {k: scene.materials[name] for k, name in enumerate(names) if scene.materials[name].cutout}
         self.vertices = np.concatenate(positions) if positions else np.zeros((0, 3))
         self.normals = np.concatenate(normals) if normals else np.zeros((0, 3))
         self.tangents = np.concatenate(tangents) if tangents else np.zeros((0, 4))
@@ -105,6 +111,37 @@ class SceneGeometry:
         self._has = (len(self.faces) > 0, len(self.emitter_triangles) > 0)
 
     def intersect(self, origins: np.ndarray, directions: np.ndarray, emitters_only: bool = False) -> Hits:
+        hits = self._first_hits(origins, directions, emitters_only)
+        if emitters_only or not self._cutouts:
+            return hits
+        origins = np.broadcast_to(origins, np.shape(directions))  # a pinhole's one origin
+        pending = self._in_hole(hits)
+        for _ in range(MAX_CUTOUT_LAYERS):
+            if not pending.any():
+                return hits
+            idx = np.flatnonzero(pending)
+            start = hits.t[idx] + self.epsilon  # on from just past the hole, along the same ray
+            again = self._first_hits(origins[idx] + directions[idx] * start[:, None], directions[idx])
+            for name in ("kind", "prim", "u", "v"):
+                getattr(hits, name)[idx] = getattr(again, name)
+            hits.t[idx] = np.where(again.kind >= 0, start + again.t, again.t)
+            pending[idx] = self._in_hole(again)
+        hits.kind[pending] = MESHES  # deeper than MAX_CUTOUT_LAYERS: blocked there
+        return hits
+
+    def _in_hole(self, hits: Hits) -> np.ndarray:
+        """Where a mesh hit lands in a cut-out material's hole."""
+        out = np.zeros(len(hits.kind), dtype=bool)
+        on_mesh = np.flatnonzero(hits.kind == MESHES)
+        materials = self.face_material[hits.prim[on_mesh]]
+        for k, material in self._cutouts.items():
+            sel = on_mesh[materials == k]
+            if len(sel):
+                uv = self.uv(hits.prim[sel], hits.u[sel], hits.v[sel])
+                out[sel] = material.coverage(uv) < material.alpha_cutoff
+        return out
+
+    def _first_hits(self, origins: np.ndarray, directions: np.ndarray, emitters_only: bool = False) -> Hits:
         scene = self._emitters_only if emitters_only else self._all
         out = scene.run(
             np.ascontiguousarray(origins, dtype=np.float32),
@@ -132,7 +169,13 @@ class SceneGeometry:
             dists=np.ascontiguousarray(distances, dtype=np.float32),
             query="OCCLUDED",
         )
-        return np.asarray(res) != -1
+        blocked = np.asarray(res) != -1
+        if self._cutouts and blocked.any():  # perhaps by a hole only: the first opaque hit decides
+            idx = np.flatnonzero(blocked)
+            origins = np.broadcast_to(origins, np.shape(directions))
+            hits = self.intersect(origins[idx], directions[idx])
+            blocked[idx] = (hits.kind >= 0) & (hits.t < np.broadcast_to(distances, blocked.shape)[idx])
+        return blocked
 
     def uv(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The meshes' texture coordinates interpolated at hits (barycentrics ``u``, ``v`` of ``prim``), (N, 2)."""

@@ -204,9 +204,6 @@ def _material(gltf: GltfFile, index: int, warnings: list[str], left_out: dict[st
     name = m.name or where
     if mode == "blend":
         left_out.setdefault("alphaMode BLEND rendered opaque (no blending yet)", []).append(name)
-    if mode == "mask":
-        left_out.setdefault("alphaMode MASK cuts the surface from the camera only (its shadows and the references "
-                            "keep the whole surface)", []).append(name)  # fmt: skip
     for extension in sorted(set(extensions) - SUPPORTED_MATERIAL_EXTENSIONS):
         left_out.setdefault(f"{extension} not supported, the base metallic-roughness material is rendered",
                             []).append(name)  # fmt: skip

@@ -57,6 +57,11 @@ from ..scene.transform import look_at, perspective
 
 _SHADERS = "reflets/techniques/shaders/"
 DEPTH_PROGRAM = ProgramSpec("shadow_depth", vertex=_SHADERS + "mesh.vert", fragment=_SHADERS + "shadow_depth.frag")
+#: the depth pass of a cut-out material (glTF alphaMode MASK): its holes cast no shadow
+CUTOUT_PROGRAM = ProgramSpec("shadow_cutout", vertex=_SHADERS + "mesh.vert", fragment=_SHADERS + "shadow_cutout.frag",
+                             flags=frozenset({"BRDF_GLTF_BASE_MAP"}))  # fmt: skip
+#: the texture unit of a cut-out's base colour while the maps are drawn (the frame's passes bind their own later)
+CUTOUT_UNIT = 0
 #: texture units of the atlas (depth comparisons; raw depths for PCSS) and storage binding of the views in every
 #: shading program
 SHADOW_UNIT, SHADOW_DEPTH_UNIT, SHADOW_NEAREST_UNIT = 11, 10, 16
@@ -192,11 +197,22 @@ class ShadowMaps:
         if self.environment_views:
             first, count = self.environment_views
             self.environment_uniforms = _environment_uniforms(views[first : first + count], first, columns, size)
-        program = get_program(ctx, DEPTH_PROGRAM)
-        self._depth_program = program
-        self._depth_vaos = [self._own(prepared.vertex_array(program, i)) for i in range(len(prepared.meshes))]
+        self._casters = [self._caster(prepared, i) for i in range(len(prepared.meshes))]
         self._fbo = self._own(ctx.framebuffer(depth_attachment=self.atlas))
         self._draw(range(len(views)))
+
+    def _caster(self, prepared, index: int) -> tuple:
+        """(program, vertex array, uniforms, coverage texture or None) drawing mesh ``index`` into a map: depth only,
+        or with a cut-out material's coverage test."""
+        material = prepared.scene.materials[prepared.scene.mesh[index].material]
+        if not material.cutout:
+            program = get_program(self.ctx, DEPTH_PROGRAM)
+            return program, self._own(prepared.vertex_array(program, index)), {}, None
+        textured = material.base_color_texture is not None
+        program = get_program(self.ctx, CUTOUT_PROGRAM, BRDF_GLTF_BASE_MAP=int(textured))
+        texture = material.textures(self.ctx)["m_base_color_map"] if textured else None
+        uniforms = {**material.uniforms(), "m_base_color_map": CUTOUT_UNIT}
+        return program, self._own(prepared.vertex_array(program, index)), uniforms, texture
 
     def _directional_views(self, light, camera) -> list[dict]:
         """A directional light's views for ``camera``: its cascades (finest first), then the whole scene's."""
@@ -288,10 +304,11 @@ class ShadowMaps:
             viewport = ((k % columns) * r, (k // columns) * r, r, r)
             self._fbo.clear(depth=1.0, viewport=viewport)
             ctx.viewport = viewport
-            set_uniforms(
-                self._depth_program, {"u_view_proj": self._views[k]["view_proj"].T.astype(np.float32).tobytes()}
-            )
-            for vao in self._depth_vaos:
+            view_proj = self._views[k]["view_proj"].T.astype(np.float32).tobytes()
+            for program, vao, uniforms, texture in self._casters:
+                if texture is not None:
+                    texture.use(CUTOUT_UNIT)
+                set_uniforms(program, {**uniforms, "u_view_proj": view_proj})
                 vao.render()
         ctx.polygon_offset = 0.0, 0.0
         ctx.disable(ctx.DEPTH_TEST)
