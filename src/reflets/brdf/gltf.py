@@ -33,8 +33,9 @@ Kulla 2017) of α_s = ``sheen_roughness``² (× A of ``sheen_roughness_texture``
 sample viewer and three.js clamp it), V_s its fitted Smith visibility (the extension's "Charlie" λ, not Ashikhmin's
 approximation), no Fresnel, and E(μ) the sheen lobe's directional albedo (the fourth channel of the split-sum
 table, :func:`ibl_table`; both renderers interpolate the same table) — the albedo-scaling layering in its
-reciprocal form. Erratum of the extension's text: with its λ, E exceeds 1 at grazing angles for smooth sheens (E =
-2.2 at n·v = 1/64, roughness 0.07; 0.85 at 1/16), which would make the scaling negative; it is clamped at 0.
+reciprocal form. A limit of the extension's formulas: with its λ, E exceeds 1 at grazing angles for smooth
+sheens (E = 2.2 at n·v = 1/64, roughness 0.07; 0.85 at 1/16), which would make the scaling negative; it is clamped
+at 0.
 
 Both renderers evaluate the textures first into per-point parameters and then the unchanged BRDF: GLSL through
 ``material_surface`` (``glsl/gltf.glsl``), NumPy through :meth:`Gltf.at` (a :class:`GltfPoints` of arrays).
