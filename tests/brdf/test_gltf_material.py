@@ -24,8 +24,9 @@ CASES = [
 ]
 
 
-def appendix_b(base, metallic, roughness, wo, wi):
-    """The specification's formulas as written there (n = +z, v = wo, l = wi), with V_GGX of its sample code."""
+def appendix_b(base, metallic, roughness, wo, wi, ior=1.5):
+    """The specification's formulas as written there (n = +z, v = wo, l = wi), with V_GGX of its sample code;
+    ``ior``: KHR_materials_ior's dielectric F0 = ((ior − 1) / (ior + 1))²."""
     n_l, n_v = wi[:, 2], wo[:, 2]
     h = (wo + wi) / np.linalg.norm(wo + wi, axis=1, keepdims=True)
     n_h, v_h = h[:, 2], np.sum(wo * h, axis=1)
@@ -36,7 +37,8 @@ def appendix_b(base, metallic, roughness, wo, wi):
     base = np.asarray(base[:3])
     fresnel = (1 - np.abs(v_h)) ** 5
     metal = specular * (base + (1 - base) * fresnel[:, None])
-    f_d = (0.04 + 0.96 * fresnel)[:, None]
+    f0 = ((ior - 1) / (ior + 1)) ** 2
+    f_d = (f0 + (1 - f0) * fresnel)[:, None]
     dielectric = (1 - f_d) * base / np.pi + f_d * specular
     return (1 - metallic) * dielectric + metallic * metal
 
@@ -239,3 +241,34 @@ def test_sheen_standard_checks(params, rng):
 @pytest.mark.parametrize("params", SHEENED)
 def test_sheen_glsl_matches_numpy(params, ctx, rng):
     check_glsl_parity(Gltf(**params), ctx, rng)
+
+
+IORS = [
+    dict(base_color=(0.2, 0.5, 0.8, 1.0), metallic=0.0, roughness=0.3, ior=1.33),  # water
+    dict(base_color=(0.9, 0.9, 0.9, 1.0), metallic=0.3, roughness=0.5, ior=2.42),  # diamond, partly metal
+    dict(base_color=(0.5, 0.5, 0.5, 1.0), metallic=0.0, roughness=0.6, ior=0.0),  # F = 1: the lobe alone
+]
+
+
+@pytest.mark.parametrize("params", IORS)
+def test_ior_equals_the_extensions_formula(params, rng):
+    """KHR_materials_ior: the dielectric's F0 = ((ior − 1) / (ior + 1))² in Appendix B's Fresnel mix (0 gives F = 1:
+    no diffuse lobe at all)."""
+    wo, wi = upper_hemisphere(rng, 4000), upper_hemisphere(rng, 4000)
+    expected = appendix_b(params["base_color"], params["metallic"], params["roughness"], wo, wi, params["ior"])
+    assert np.allclose(Gltf(**params).eval(wo, wi), expected, rtol=1e-9, atol=1e-12)
+    assert not np.allclose(Gltf(**params).eval(wo, wi), Gltf(**{**params, "ior": 1.5}).eval(wo, wi))
+
+
+@pytest.mark.parametrize("params", IORS[:2])
+def test_ior_standard_checks_and_glsl(params, ctx, rng):
+    run_standard_checks(Gltf(**params), rng)
+    check_glsl_parity(Gltf(**params), ctx, rng)
+
+
+@pytest.mark.parametrize("ior", [0.5, -1.0, float("nan"), 1e300])
+def test_ior_between_0_and_1_or_unbounded_is_refused(ior):
+    from pydantic import ValidationError
+
+    with pytest.raises(ValidationError):
+        Gltf(ior=ior)

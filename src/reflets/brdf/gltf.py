@@ -4,7 +4,8 @@
 
 with c the base colour, m the metallic factor, α = roughness², D the isotropic GGX distribution, V = G₂ / (4 |n·l|
 |n·v|) with the height-correlated Smith G₂ = 1 / (1 + Λ(v) + Λ(l)) (the form of Appendix B's sample
-implementation), F_d = 0.04 + 0.96 (1 − |v·h|)⁵ (the dielectric's Schlick Fresnel, η = 1.5) and
+implementation), F_d = F₀ + (1 − F₀)(1 − |v·h|)⁵ (the dielectric's Schlick Fresnel, F₀ = ((η − 1) / (η + 1))²: 0.04
+at glTF's η = 1.5, KHR_materials_ior's ``ior`` otherwise; η = 0 makes F_d = 1, as the extension defines it) and
 F_m = c + (1 − c)(1 − |v·h|)⁵ (the metal's, F₀ = c). Single scattering, like the specification: rough metals
 lose energy at grazing angles.
 
@@ -48,7 +49,7 @@ from pathlib import Path
 from typing import Annotated, ClassVar, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from ..cache import Cache, source_hash
 from ..quantities import NonNeg
@@ -92,6 +93,7 @@ class GltfPoints:
     coat: np.ndarray | None = None  # (N,) clear coat weight; None: no coat
     coat_alpha: np.ndarray | None = None  # (N,)
     coat_normal: np.ndarray | None = None  # (N, 3) in the shading frame (unit)
+    f0: float = DIELECTRIC_F0  # the dielectric's Fresnel reflectance at normal incidence (KHR_materials_ior)
     sheen: np.ndarray | None = None  # (N, 3) sheen colour; None: no sheen
     sheen_roughness: np.ndarray | None = None  # (N,), at least MIN_SHEEN_ROUGHNESS
 
@@ -143,7 +145,7 @@ class GltfPoints:
         g2 = 1.0 / (1.0 + smith_lambda_ggx(wo, a, a) + smith_lambda_ggx(wi, a, a))
         with np.errstate(divide="ignore", invalid="ignore"):
             dv = np.where(up, d * g2 / (4.0 * wo[..., 2] * wi[..., 2]), 0.0)
-        f_d = DIELECTRIC_F0 + (1.0 - DIELECTRIC_F0) * schlick
+        f_d = self.f0 + (1.0 - self.f0) * schlick
         f_m = self.base + (1.0 - self.base) * schlick[..., None]
         m, dv, f_d = self.metallic[..., None], dv[..., None], f_d[..., None]
         value = (1.0 - m) * ((1.0 - f_d) * self.base / np.pi + f_d * dv) + m * f_m * dv
@@ -153,8 +155,8 @@ class GltfPoints:
         """The chance of sampling the GGX lobe: its normal-incidence weight against the diffuse one."""
         luminance = np.array([0.2126, 0.7152, 0.0722])
         lum = self.base @ luminance
-        specular = (1.0 - self.metallic) * DIELECTRIC_F0 + self.metallic * lum
-        diffuse = (1.0 - self.metallic) * (1.0 - DIELECTRIC_F0) * lum
+        specular = (1.0 - self.metallic) * self.f0 + self.metallic * lum
+        diffuse = (1.0 - self.metallic) * (1.0 - self.f0) * lum
         if self.sheen is not None:  # the sheen's broad lobe: sampled by the cosine-weighted directions
             diffuse = diffuse + self.sheen @ luminance
         total = specular + diffuse
@@ -259,6 +261,7 @@ class Gltf(Material):
     clearcoat, clearcoat_texture : the clear coat's weight (× R; KHR_materials_clearcoat; default 0: none).
     clearcoat_roughness, clearcoat_roughness_texture : its roughness (× G); α_c = roughness² (at least 1e-3).
     clearcoat_normal_texture, clearcoat_normal_scale : its own tangent-space normal map (else the geometric normal).
+    ior : the dielectric's index of refraction (KHR_materials_ior; default 1.5: F₀ = 0.04; ≥ 1, or 0: F = 1).
     sheen_color, sheen_color_texture : the sheen's colour (× RGB, sRGB; KHR_materials_sheen; default 0: none).
     sheen_roughness, sheen_roughness_texture : its roughness (× A; at least 0.07).
     alpha_mode : "opaque" (default), "mask" (coverage < alpha_cutoff is a hole) or "blend".
@@ -286,6 +289,7 @@ class Gltf(Material):
     clearcoat_roughness_texture: TextureRef | None = None
     clearcoat_normal_texture: TextureRef | None = None
     clearcoat_normal_scale: Annotated[float, Field(ge=-100, le=100, allow_inf_nan=False)] = 1.0
+    ior: Annotated[float, Field(ge=0, le=100, allow_inf_nan=False)] = 1.5
     sheen_color: tuple[Unit, Unit, Unit] = (0.0, 0.0, 0.0)
     sheen_color_texture: TextureRef | None = None
     sheen_roughness: Unit = 0.0
@@ -298,14 +302,27 @@ class Gltf(Material):
 
     # ------------------------------------------------------------------------------------------ NumPy
 
+    @field_validator("ior")
+    @classmethod
+    def _ior(cls, value: float) -> float:
+        if 0 < value < 1:
+            raise ValueError("must be at least 1, or 0 (KHR_materials_ior: a Fresnel of 1 everywhere)")
+        return value
+
     @property
     def alpha(self) -> float:
         return max(self.roughness * self.roughness, MIN_ALPHA)
 
+    @property
+    def dielectric_f0(self) -> float:
+        """((η − 1) / (η + 1))²: 0.04 at η = 1.5, 1 at η = 0."""
+        return ((self.ior - 1.0) / (self.ior + 1.0)) ** 2
+
     def constant_points(self, shape: tuple[int, ...] = ()) -> GltfPoints:
         """The factors alone (no texture), broadcast to ``shape`` (the coat's normal: the shading normal)."""
         base = np.broadcast_to(np.asarray(self.base_color[:3], np.float64), (*shape, 3))
-        points = GltfPoints(base=base, metallic=np.full(shape, float(self.metallic)), alpha=np.full(shape, self.alpha))
+        points = GltfPoints(base=base, metallic=np.full(shape, float(self.metallic)), alpha=np.full(shape, self.alpha),
+                            f0=self.dielectric_f0)  # fmt: skip
         if self.clearcoat > 0:
             points.coat = np.full(shape, float(self.clearcoat))
             points.coat_alpha = np.full(shape, max(self.clearcoat_roughness**2, MIN_ALPHA))
@@ -345,7 +362,7 @@ class Gltf(Material):
         return self.metallic == 1.0
 
     def lobe_summary(self):
-        diffuse = tuple(float(c) * (1.0 - self.metallic) * (1.0 - DIELECTRIC_F0) for c in self.base_color[:3])
+        diffuse = tuple(float(c) * (1.0 - self.metallic) * (1.0 - self.dielectric_f0) for c in self.base_color[:3])
         from .base import blinn_phong_exponent
 
         return diffuse, 2, blinn_phong_exponent(self.alpha)
@@ -391,7 +408,8 @@ class Gltf(Material):
         texels = self._lookup("metallic_roughness_texture", uv)
         if texels is not None:
             metallic, roughness = metallic * texels[:, 2], roughness * texels[:, 1]
-        points = GltfPoints(base=base, metallic=metallic, alpha=np.maximum(roughness * roughness, MIN_ALPHA))
+        points = GltfPoints(base=base, metallic=metallic, alpha=np.maximum(roughness * roughness, MIN_ALPHA),
+                            f0=self.dielectric_f0)  # fmt: skip
         if self.clearcoat > 0:
             self._coat_at(points, uv, frames)
         if self.sheened:
@@ -470,6 +488,7 @@ class Gltf(Material):
             "m_clearcoat": (float(self.clearcoat), float(self.clearcoat_roughness)),
             "m_clearcoat_normal_scale": float(self.clearcoat_normal_scale),
             "m_sheen": (*(float(c) for c in self.sheen_color), float(self.sheen_roughness)),
+            "m_dielectric_f0": float(self.dielectric_f0),
         }
         for field, sampler, _, _ in SLOTS:
             ref = getattr(self, field)

@@ -12,6 +12,7 @@ uniform float m_normal_scale;
 uniform float m_occlusion_strength;
 uniform vec3 m_emissive;             // factor x emissive_strength
 uniform float m_alpha_cutoff;
+uniform float m_dielectric_f0;       // ((ior - 1) / (ior + 1))^2: 0.04 at glTF's 1.5 (KHR_materials_ior)
 // each texture with the mat3 taking mesh uv (v up) to image uv (origin top-left, KHR_texture_transform applied)
 #if BRDF_GLTF_BASE_MAP
 uniform sampler2D m_base_color_map;
@@ -227,17 +228,17 @@ bool material_covered() {
 #endif
 }
 
-// The environment's split sum for this BRDF: its specular directional albedo F0 A + B (Schlick: F0 mixes 0.04 and
-// the base colour by metallic) and the dielectric's diffuse albedo (1 - m) c 0.96 (1 - P), P = the mean of
-// (1 - v.h)^5 over the cosine-weighted hemisphere, both from the table at mu = n.v and the roughness.
+// The environment's split sum for this BRDF: its specular directional albedo F0 A + B (Schlick: F0 mixes the
+// dielectric's and the base colour by metallic) and the dielectric's diffuse albedo (1 - m) c (1 - F0_d) (1 - P),
+// P = the mean of (1 - v.h)^5 over the cosine-weighted hemisphere, both from the table at mu = n.v and the roughness.
 // A sheen scales both by 1 - max(C) E(mu) (the extension's simplified form for the environment) and adds its own
 // albedo C E(mu) to the diffuse one: its broad lobe lit by the irradiance (an approximation: the lobe leans to
 // grazing angles where the irradiance map's cosine does not; docs/assets.md measures it).
 void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, out float alpha) {
     vec3 abp = texture(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), sqrt(g_alpha))).rgb;
-    vec3 f0 = mix(vec3(0.04), g_base, g_metallic);
+    vec3 f0 = mix(vec3(m_dielectric_f0), g_base, g_metallic);
     specular_albedo = f0 * abp.x + abp.y;
-    diffuse_albedo = (1.0 - g_metallic) * g_base * 0.96 * (1.0 - abp.z);
+    diffuse_albedo = (1.0 - g_metallic) * g_base * (1.0 - m_dielectric_f0) * (1.0 - abp.z);
     alpha = g_alpha;
 #if BRDF_GLTF_SHEEN
     float sheen_albedo = gltf_sheen_albedo(mu);
@@ -290,7 +291,7 @@ vec3 brdf_eval(vec3 wo, vec3 wi) {
     vec3 h = normalize(wo + wi);
     float schlick = pow(1.0 - clamp(dot(wo, h), 0.0, 1.0), 5.0);
     float dv = gltf_d(h, g_alpha) / ((1.0 + gltf_lambda(wo, g_alpha) + gltf_lambda(wi, g_alpha)) * 4.0 * wo.z * wi.z);
-    float f_d = 0.04 + 0.96 * schlick;
+    float f_d = m_dielectric_f0 + (1.0 - m_dielectric_f0) * schlick;
     vec3 f_m = g_base + (1.0 - g_base) * schlick;
     vec3 value = (1.0 - g_metallic) * ((1.0 - f_d) * g_base * INV_PI + f_d * dv) + g_metallic * f_m * dv;
 #if BRDF_GLTF_SHEEN
