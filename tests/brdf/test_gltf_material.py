@@ -272,3 +272,31 @@ def test_ior_between_0_and_1_or_unbounded_is_refused(ior):
 
     with pytest.raises(ValidationError):
         Gltf(ior=ior)
+
+
+def test_unlit_shows_its_base_colour_whatever_the_lights(ctx):
+    """KHR_materials_unlit: a textured unlit plane under a point light and the studio map is its base colour ×
+    texture, on the GPU and in the reference (no light reflected, none added)."""
+    from pathlib import Path
+
+    import reflets
+    from reflets.scene.assets import default_environment
+
+    texture = {"texture": str(Path(__file__).parents[1] / "data" / "gltf" / "SheenTest" / "sheen.png")}  # stripes
+    scene = reflets.load_dict({
+        "camera": {"position": [0, 0, 2], "look_at": [0, 0, 0], "fov_y": 30, "size": [32, 24]},
+        "materials": {"m": {"type": "gltf", "unlit": True, "base_color": [0.5, 0.8, 1.0, 1.0],
+                            "base_color_texture": texture}},
+        "mesh": [{"shape": "plane", "size": [4, 4], "material": "m", "transform": {"rotate": [90, 0, 0]}}],
+        "light": [{"type": "point", "position": [0.5, 0.5, 1], "intensity": [50, 50, 50]},
+                  {"type": "environment", "file": str(default_environment())}],
+    })  # fmt: skip
+    gpu = reflets.render(scene, spp=16)
+    ref = reflets.reference(scene, spp=16, pixel="box", progress=False).image
+    uv = reflets.render(scene, method="uv", spp=1)[..., :2].reshape(-1, 2)
+    expected = scene.materials["m"].emission(uv).reshape(gpu.shape)
+    assert np.mean((ref - gpu) ** 2) / np.mean(ref**2) < 1e-3  # both the texture filtered over the pixel
+    assert np.mean(np.abs(ref - expected)) / np.mean(expected) < 0.05  # ... its centre's texel but at the edges
+    lit = reflets.render(scene.model_copy(update={"materials": {"m": scene.materials["m"].model_copy(
+        update={"unlit": False})}}), spp=16)  # fmt: skip
+    assert np.mean(np.abs(lit - gpu)) > 0.05  # lit, the same material is something else

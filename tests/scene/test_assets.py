@@ -98,8 +98,9 @@ def test_sheen_read_with_its_textures_and_no_warning():
     assert coated.sheened and coated.clearcoat == pytest.approx(0.5)
 
 
-def test_ior_read_and_checked(tmp_path):
-    """KHR_materials_ior becomes ``ior`` (no warning); an ior between 0 and 1 is one line naming the material."""
+def test_ior_and_unlit_read_and_checked(tmp_path):
+    """KHR_materials_ior becomes ``ior``, KHR_materials_unlit ``unlit`` (no warning); an ior between 0 and 1 is one
+    line naming the material."""
     import json
     import shutil
 
@@ -107,10 +108,12 @@ def test_ior_read_and_checked(tmp_path):
         shutil.copy(ASSETS / "SheenTest" / name, tmp_path / name)
     document = json.loads((ASSETS / "SheenTest" / "SheenTest.gltf").read_text("utf-8"))
     document["materials"][0]["extensions"]["KHR_materials_ior"] = {"ior": 1.33}
+    document["materials"][3]["extensions"] = {"KHR_materials_unlit": {}}
     (tmp_path / "a.gltf").write_text(json.dumps(document), "utf-8")
     scene, said = load(tmp_path / "a.gltf")
     assert not said and scene.materials["a/velvet"].ior == pytest.approx(1.33)
-    assert scene.materials["a/felt"].ior == 1.5
+    assert scene.materials["a/felt"].ior == 1.5 and scene.materials["a/felt"].unlit
+    assert not scene.materials["a/velvet"].unlit
     document["materials"][0]["extensions"]["KHR_materials_ior"] = {"ior": 0.5}
     (tmp_path / "b.gltf").write_text(json.dumps(document), "utf-8")
     with pytest.raises(SceneError, match="ior"):

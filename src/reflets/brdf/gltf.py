@@ -38,6 +38,9 @@ reciprocal form. A limit of the extension's formulas: with its λ, E exceeds 1 a
 sheens (E = 2.2 at n·v = 1/64, roughness 0.07; 0.85 at 1/16), which would make the scaling negative; it is clamped
 at 0.
 
+KHR_materials_unlit (``unlit``): no light is reflected; the surface shows its base colour (× texture) as the radiance
+leaving it, whatever the lights — an emitter with a zero BRDF in both renderers.
+
 Both renderers evaluate the textures first into per-point parameters and then the unchanged BRDF: GLSL through
 ``material_surface`` (``glsl/gltf.glsl``), NumPy through :meth:`Gltf.at` (a :class:`GltfPoints` of arrays).
 """
@@ -96,8 +99,11 @@ class GltfPoints:
     f0: float = DIELECTRIC_F0  # the dielectric's Fresnel reflectance at normal incidence (KHR_materials_ior)
     sheen: np.ndarray | None = None  # (N, 3) sheen colour; None: no sheen
     sheen_roughness: np.ndarray | None = None  # (N,), at least MIN_SHEEN_ROUGHNESS
+    unlit: bool = False  # KHR_materials_unlit: reflects nothing (its colour is emitted)
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        if self.unlit:
+            return np.zeros(np.broadcast_shapes(np.shape(wo), np.shape(wi)))
         value = self._base_eval(wo, wi)
         if self.sheen is not None:
             value = self._sheened(value, wo, wi)
@@ -261,6 +267,7 @@ class Gltf(Material):
     clearcoat, clearcoat_texture : the clear coat's weight (× R; KHR_materials_clearcoat; default 0: none).
     clearcoat_roughness, clearcoat_roughness_texture : its roughness (× G); α_c = roughness² (at least 1e-3).
     clearcoat_normal_texture, clearcoat_normal_scale : its own tangent-space normal map (else the geometric normal).
+    unlit : KHR_materials_unlit: the base colour (× texture) is the radiance leaving the surface; lights ignored.
     ior : the dielectric's index of refraction (KHR_materials_ior; default 1.5: F₀ = 0.04; ≥ 1, or 0: F = 1).
     sheen_color, sheen_color_texture : the sheen's colour (× RGB, sRGB; KHR_materials_sheen; default 0: none).
     sheen_roughness, sheen_roughness_texture : its roughness (× A; at least 0.07).
@@ -290,6 +297,7 @@ class Gltf(Material):
     clearcoat_normal_texture: TextureRef | None = None
     clearcoat_normal_scale: Annotated[float, Field(ge=-100, le=100, allow_inf_nan=False)] = 1.0
     ior: Annotated[float, Field(ge=0, le=100, allow_inf_nan=False)] = 1.5
+    unlit: bool = False
     sheen_color: tuple[Unit, Unit, Unit] = (0.0, 0.0, 0.0)
     sheen_color_texture: TextureRef | None = None
     sheen_roughness: Unit = 0.0
@@ -322,7 +330,7 @@ class Gltf(Material):
         """The factors alone (no texture), broadcast to ``shape`` (the coat's normal: the shading normal)."""
         base = np.broadcast_to(np.asarray(self.base_color[:3], np.float64), (*shape, 3))
         points = GltfPoints(base=base, metallic=np.full(shape, float(self.metallic)), alpha=np.full(shape, self.alpha),
-                            f0=self.dielectric_f0)  # fmt: skip
+                            f0=self.dielectric_f0, unlit=self.unlit)  # fmt: skip
         if self.clearcoat > 0:
             points.coat = np.full(shape, float(self.clearcoat))
             points.coat_alpha = np.full(shape, max(self.clearcoat_roughness**2, MIN_ALPHA))
@@ -409,7 +417,7 @@ class Gltf(Material):
         if texels is not None:
             metallic, roughness = metallic * texels[:, 2], roughness * texels[:, 1]
         points = GltfPoints(base=base, metallic=metallic, alpha=np.maximum(roughness * roughness, MIN_ALPHA),
-                            f0=self.dielectric_f0)  # fmt: skip
+                            f0=self.dielectric_f0, unlit=self.unlit)  # fmt: skip
         if self.clearcoat > 0:
             self._coat_at(points, uv, frames)
         if self.sheened:
@@ -454,7 +462,11 @@ class Gltf(Material):
         return alpha if texels is None else alpha * texels[:, 3]
 
     def emission(self, uv: np.ndarray) -> np.ndarray:
-        """Emitted radiance (N, 3) at mesh uv."""
+        """Emitted radiance (N, 3) at mesh uv (unlit: the base colour)."""
+        if self.unlit:
+            texels = self._lookup("base_color_texture", uv)
+            base = np.tile(np.asarray(self.base_color[:3], np.float64), (len(uv), 1))
+            return base if texels is None else base * texels[:, :3]
         out = np.broadcast_to(np.asarray(self.emissive, np.float64) * self.emissive_strength, (len(uv), 3)).copy()
         texels = self._lookup("emissive_texture", uv)
         return out if texels is None else out * texels[:, :3]
@@ -475,6 +487,7 @@ class Gltf(Material):
             "BRDF_GLTF_MASK": int(self.alpha_mode == "mask"),
             "BRDF_GLTF_COAT": int(self.clearcoat > 0),
             "BRDF_GLTF_SHEEN": int(self.sheened),
+            "BRDF_GLTF_UNLIT": int(self.unlit),
         }
 
     def uniforms(self) -> dict[str, object]:

@@ -12,8 +12,8 @@ What becomes what (docs/assets.md has the full table):
   vertices (reflets' meshes are stored in world space), the parsed file and its accessors are shared;
 - materials → ``type = "gltf"`` (Appendix B) with their textures (``TextureRef``: the glTF file and the image
   index, the sampler's wrap modes and filter, ``KHR_texture_transform``), ``KHR_materials_emissive_strength``,
-  ``KHR_materials_clearcoat``, ``KHR_materials_sheen``, ``KHR_materials_ior``; any other material extension → a
-  warning naming it (its base material is rendered);
+  ``KHR_materials_clearcoat``, ``KHR_materials_sheen``, ``KHR_materials_ior``, ``KHR_materials_unlit``; any other
+  material extension → a warning naming it (its base material is rendered);
 - cameras → ``Camera`` (perspective, or orthographic with ``ortho_height`` = 2 ymag and the aspect xmag / ymag;
   ``--camera K`` picks one; default the first, else one framing the bounding box);
 - ``KHR_lights_punctual`` → point / directional lights, photometric units converted to radiometric ones at
@@ -44,7 +44,7 @@ ASSET_EXTENSIONS = (".gltf", ".glb", ".obj")
 LUMINOUS_EFFICACY = 683.0
 #: material extensions read into the ``gltf`` material
 SUPPORTED_MATERIAL_EXTENSIONS = {"KHR_materials_emissive_strength", "KHR_texture_transform", "KHR_materials_clearcoat",
-                                 "KHR_materials_sheen", "KHR_materials_ior"}  # fmt: skip
+                                 "KHR_materials_sheen", "KHR_materials_ior", "KHR_materials_unlit"}  # fmt: skip
 WRAPS = {10497: "repeat", 33071: "clamp", 33648: "mirror"}
 NEAREST_FILTERS = {9728, 9984, 9986}  # NEAREST, NEAREST_MIPMAP_NEAREST, NEAREST_MIPMAP_LINEAR (mag / min)
 
@@ -195,6 +195,8 @@ def _material(gltf: GltfFile, index: int, warnings: list[str], left_out: dict[st
     if "KHR_materials_clearcoat" in extensions:
         out |= _clearcoat(gltf, extensions["KHR_materials_clearcoat"], f"{where}.extensions.KHR_materials_clearcoat",
                           warnings)  # fmt: skip
+    if "KHR_materials_unlit" in extensions:
+        out["unlit"] = True
     if "KHR_materials_ior" in extensions:
         ior = extensions["KHR_materials_ior"]
         if not isinstance(ior, dict):

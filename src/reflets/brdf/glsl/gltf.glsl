@@ -217,7 +217,13 @@ vec3 brdf_eval_patch(vec3 wo, vec3 wi, float rho) {
     return f;
 }
 
-vec3 material_emission() { return g_emission; }
+vec3 material_emission() {
+#if BRDF_GLTF_UNLIT
+    return g_base;  // KHR_materials_unlit: the base colour leaves the surface as it is
+#else
+    return g_emission;
+#endif
+}
 float material_occlusion() { return g_occlusion; }
 // false where alpha_mode = "mask" cuts the surface away
 bool material_covered() {
@@ -235,6 +241,11 @@ bool material_covered() {
 // albedo C E(mu) to the diffuse one: its broad lobe lit by the irradiance (an approximation: the lobe leans to
 // grazing angles where the irradiance map's cosine does not; docs/assets.md measures it).
 void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, out float alpha) {
+#if BRDF_GLTF_UNLIT
+    diffuse_albedo = specular_albedo = vec3(0.0);
+    alpha = 1.0;
+    return;
+#endif
     vec3 abp = texture(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), sqrt(g_alpha))).rgb;
     vec3 f0 = mix(vec3(m_dielectric_f0), g_base, g_metallic);
     specular_albedo = f0 * abp.x + abp.y;
@@ -287,6 +298,9 @@ float gltf_lambda(vec3 w, float a) {
 }
 
 vec3 brdf_eval(vec3 wo, vec3 wi) {
+#if BRDF_GLTF_UNLIT
+    return vec3(0.0);
+#endif
     if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
     vec3 h = normalize(wo + wi);
     float schlick = pow(1.0 - clamp(dot(wo, h), 0.0, 1.0), 5.0);
