@@ -24,22 +24,23 @@ CASES = [
 ]
 
 
-def appendix_b(base, metallic, roughness, wo, wi, ior=1.5):
+def appendix_b(base, metallic, roughness, wo, wi, ior=1.5, specular_weight=1.0, specular_color=(1.0, 1.0, 1.0)):
     """The specification's formulas as written there (n = +z, v = wo, l = wi), with V_GGX of its sample code;
-    ``ior``: KHR_materials_ior's dielectric F0 = ((ior − 1) / (ior + 1))²."""
+    ``ior``: KHR_materials_ior's dielectric F0 = ((ior − 1) / (ior + 1))²; ``specular_weight``, ``specular_color``:
+    KHR_materials_specular's fresnel_mix (F0 tinted and clamped at 1, the base weighed by 1 − w max(F))."""
     n_l, n_v = wi[:, 2], wo[:, 2]
     h = (wo + wi) / np.linalg.norm(wo + wi, axis=1, keepdims=True)
     n_h, v_h = h[:, 2], np.sum(wo * h, axis=1)
     a2 = max(roughness**2, 1e-3) ** 2
     d = a2 / (np.pi * (n_h * n_h * (a2 - 1) + 1) ** 2)
     v = 0.5 / (n_l * np.sqrt(n_v * n_v * (1 - a2) + a2) + n_v * np.sqrt(n_l * n_l * (1 - a2) + a2))
-    specular = (v * d)[:, None]
+    lobe = (v * d)[:, None]
     base = np.asarray(base[:3])
     fresnel = (1 - np.abs(v_h)) ** 5
-    metal = specular * (base + (1 - base) * fresnel[:, None])
-    f0 = ((ior - 1) / (ior + 1)) ** 2
-    f_d = (f0 + (1 - f0) * fresnel)[:, None]
-    dielectric = (1 - f_d) * base / np.pi + f_d * specular
+    metal = lobe * (base + (1 - base) * fresnel[:, None])
+    f0 = np.minimum(((ior - 1) / (ior + 1)) ** 2 * np.asarray(specular_color), 1.0)
+    f_d = f0 + (1 - f0) * fresnel[:, None]  # (N, 3)
+    dielectric = (1 - specular_weight * f_d.max(axis=1, keepdims=True)) * base / np.pi + specular_weight * f_d * lobe
     return (1 - metallic) * dielectric + metallic * metal
 
 
@@ -300,3 +301,25 @@ def test_unlit_shows_its_base_colour_whatever_the_lights(ctx):
     lit = reflets.render(scene.model_copy(update={"materials": {"m": scene.materials["m"].model_copy(
         update={"unlit": False})}}), spp=16)  # fmt: skip
     assert np.mean(np.abs(lit - gpu)) > 0.05  # lit, the same material is something else
+
+
+SPECULARS = [
+    dict(base_color=(0.6, 0.3, 0.2, 1.0), metallic=0.0, roughness=0.35, specular=0.5, specular_color=(1.0, 0.5, 2.0)),
+    dict(base_color=(0.2, 0.2, 0.2, 1.0), metallic=0.2, roughness=0.6, specular=1.0, specular_color=(10.0, 20.0, 30.0),
+         ior=1.6),  # fmt: skip  # F0 clamped at 1 in every channel
+]
+
+
+@pytest.mark.parametrize("params", SPECULARS)
+def test_specular_equals_the_extensions_formula(params, rng):
+    """KHR_materials_specular's fresnel_mix: F0 = min(F0(ior) × colour, 1), the lobe × w F, the base × (1 − w max F)."""
+    wo, wi = upper_hemisphere(rng, 4000), upper_hemisphere(rng, 4000)
+    expected = appendix_b(params["base_color"], params["metallic"], params["roughness"], wo, wi,
+                          params.get("ior", 1.5), params["specular"], params["specular_color"])  # fmt: skip
+    assert np.allclose(Gltf(**params).eval(wo, wi), expected, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("params", SPECULARS)
+def test_specular_standard_checks_and_glsl(params, ctx, rng):
+    run_standard_checks(Gltf(**params), rng)
+    check_glsl_parity(Gltf(**params), ctx, rng)

@@ -38,6 +38,10 @@ reciprocal form. A limit of the extension's formulas: with its λ, E exceeds 1 a
 sheens (E = 2.2 at n·v = 1/64, roughness 0.07; 0.85 at 1/16), which would make the scaling negative; it is clamped
 at 0.
 
+KHR_materials_specular tints and weighs the dielectric's Fresnel (Khronos' ``fresnel_mix``): with w = ``specular``
+(× A of ``specular_texture``) and F₀ = min(((η − 1) / (η + 1))² × ``specular_color`` (× RGB of its texture, sRGB),
+1) per channel, F = F₀ + (1 − F₀)(1 − |v·h|)⁵ and the dielectric is (1 − w max(F)) c/π + w F D V.
+
 KHR_materials_unlit (``unlit``): no light is reflected; the surface shows its base colour (× texture) as the radiance
 leaving it, whatever the lights — an emitter with a zero BRDF in both renderers.
 
@@ -75,6 +79,8 @@ SLOTS = (
     ("clearcoat_normal_texture", "m_clearcoat_normal_map", False, "BRDF_GLTF_COAT_NORMAL_MAP"),
     ("sheen_color_texture", "m_sheen_color_map", True, "BRDF_GLTF_SHEEN_MAP"),
     ("sheen_roughness_texture", "m_sheen_roughness_map", False, "BRDF_GLTF_SHEEN_ROUGHNESS_MAP"),
+    ("specular_texture", "m_specular_map", False, "BRDF_GLTF_SPECULAR_MAP"),
+    ("specular_color_texture", "m_specular_color_map", True, "BRDF_GLTF_SPECULAR_COLOR_MAP"),
 )
 #: the smallest sheen roughness rendered (Khronos' sample viewer and three.js clamp it there: below, the Charlie
 #: lobe is a needle at grazing half vectors)
@@ -96,7 +102,8 @@ class GltfPoints:
     coat: np.ndarray | None = None  # (N,) clear coat weight; None: no coat
     coat_alpha: np.ndarray | None = None  # (N,)
     coat_normal: np.ndarray | None = None  # (N, 3) in the shading frame (unit)
-    f0: float = DIELECTRIC_F0  # the dielectric's Fresnel reflectance at normal incidence (KHR_materials_ior)
+    f0: np.ndarray | float = DIELECTRIC_F0  # the dielectric's Fresnel at normal incidence: scalar or (N, 3)
+    specular: np.ndarray | float = 1.0  # its weight (KHR_materials_specular), scalar or (N,)
     sheen: np.ndarray | None = None  # (N, 3) sheen colour; None: no sheen
     sheen_roughness: np.ndarray | None = None  # (N,), at least MIN_SHEEN_ROUGHNESS
     unlit: bool = False  # KHR_materials_unlit: reflects nothing (its colour is emitted)
@@ -151,18 +158,22 @@ class GltfPoints:
         g2 = 1.0 / (1.0 + smith_lambda_ggx(wo, a, a) + smith_lambda_ggx(wi, a, a))
         with np.errstate(divide="ignore", invalid="ignore"):
             dv = np.where(up, d * g2 / (4.0 * wo[..., 2] * wi[..., 2]), 0.0)
-        f_d = self.f0 + (1.0 - self.f0) * schlick
+        f0 = np.broadcast_to(self.f0, (*schlick.shape, 3)) if np.ndim(self.f0) else self.f0
+        f_d = f0 + (1.0 - f0) * schlick[..., None]  # (…, 3), or (…, 1) for a grey F₀
+        w = np.asarray(self.specular, np.float64)[..., None]
         f_m = self.base + (1.0 - self.base) * schlick[..., None]
-        m, dv, f_d = self.metallic[..., None], dv[..., None], f_d[..., None]
-        value = (1.0 - m) * ((1.0 - f_d) * self.base / np.pi + f_d * dv) + m * f_m * dv
+        m, dv = self.metallic[..., None], dv[..., None]
+        diffuse_weight = 1.0 - w * np.max(f_d, axis=-1, keepdims=True)
+        value = (1.0 - m) * (diffuse_weight * self.base / np.pi + w * f_d * dv) + m * f_m * dv
         return np.where(up[..., None], value, 0.0)
 
     def _specular_probability(self) -> np.ndarray:
         """The chance of sampling the GGX lobe: its normal-incidence weight against the diffuse one."""
         luminance = np.array([0.2126, 0.7152, 0.0722])
         lum = self.base @ luminance
-        specular = (1.0 - self.metallic) * self.f0 + self.metallic * lum
-        diffuse = (1.0 - self.metallic) * (1.0 - self.f0) * lum
+        f0 = np.mean(self.f0, axis=-1) if np.ndim(self.f0) else self.f0
+        specular = (1.0 - self.metallic) * self.specular * f0 + self.metallic * lum
+        diffuse = (1.0 - self.metallic) * (1.0 - self.specular * f0) * lum
         if self.sheen is not None:  # the sheen's broad lobe: sampled by the cosine-weighted directions
             diffuse = diffuse + self.sheen @ luminance
         total = specular + diffuse
@@ -267,6 +278,8 @@ class Gltf(Material):
     clearcoat, clearcoat_texture : the clear coat's weight (× R; KHR_materials_clearcoat; default 0: none).
     clearcoat_roughness, clearcoat_roughness_texture : its roughness (× G); α_c = roughness² (at least 1e-3).
     clearcoat_normal_texture, clearcoat_normal_scale : its own tangent-space normal map (else the geometric normal).
+    specular, specular_texture : the dielectric's specular weight (× A; KHR_materials_specular; default 1).
+    specular_color, specular_color_texture : its Fresnel tint (× RGB, sRGB; default 1, 1, 1; F₀ at most 1).
     unlit : KHR_materials_unlit: the base colour (× texture) is the radiance leaving the surface; lights ignored.
     ior : the dielectric's index of refraction (KHR_materials_ior; default 1.5: F₀ = 0.04; ≥ 1, or 0: F = 1).
     sheen_color, sheen_color_texture : the sheen's colour (× RGB, sRGB; KHR_materials_sheen; default 0: none).
@@ -297,6 +310,10 @@ class Gltf(Material):
     clearcoat_normal_texture: TextureRef | None = None
     clearcoat_normal_scale: Annotated[float, Field(ge=-100, le=100, allow_inf_nan=False)] = 1.0
     ior: Annotated[float, Field(ge=0, le=100, allow_inf_nan=False)] = 1.5
+    specular: Unit = 1.0
+    specular_texture: TextureRef | None = None
+    specular_color: RGB = (1.0, 1.0, 1.0)
+    specular_color_texture: TextureRef | None = None
     unlit: bool = False
     sheen_color: tuple[Unit, Unit, Unit] = (0.0, 0.0, 0.0)
     sheen_color_texture: TextureRef | None = None
@@ -326,11 +343,18 @@ class Gltf(Material):
         """((η − 1) / (η + 1))²: 0.04 at η = 1.5, 1 at η = 0."""
         return ((self.ior - 1.0) / (self.ior + 1.0)) ** 2
 
+    @property
+    def _specular_f0(self) -> float | np.ndarray:
+        """The dielectric's F₀ of the factors: the ior's, tinted by ``specular_color`` (RGB) when it is not white."""
+        if tuple(self.specular_color) == (1.0, 1.0, 1.0):
+            return self.dielectric_f0
+        return np.minimum(self.dielectric_f0 * np.asarray(self.specular_color, np.float64), 1.0)
+
     def constant_points(self, shape: tuple[int, ...] = ()) -> GltfPoints:
         """The factors alone (no texture), broadcast to ``shape`` (the coat's normal: the shading normal)."""
         base = np.broadcast_to(np.asarray(self.base_color[:3], np.float64), (*shape, 3))
         points = GltfPoints(base=base, metallic=np.full(shape, float(self.metallic)), alpha=np.full(shape, self.alpha),
-                            f0=self.dielectric_f0, unlit=self.unlit)  # fmt: skip
+                            f0=self._specular_f0, specular=float(self.specular), unlit=self.unlit)  # fmt: skip
         if self.clearcoat > 0:
             points.coat = np.full(shape, float(self.clearcoat))
             points.coat_alpha = np.full(shape, max(self.clearcoat_roughness**2, MIN_ALPHA))
@@ -417,7 +441,14 @@ class Gltf(Material):
         if texels is not None:
             metallic, roughness = metallic * texels[:, 2], roughness * texels[:, 1]
         points = GltfPoints(base=base, metallic=metallic, alpha=np.maximum(roughness * roughness, MIN_ALPHA),
-                            f0=self.dielectric_f0, unlit=self.unlit)  # fmt: skip
+                            f0=self._specular_f0, specular=float(self.specular), unlit=self.unlit)  # fmt: skip
+        texels = self._lookup("specular_texture", uv)
+        if texels is not None:
+            points.specular = self.specular * texels[:, 3]
+        texels = self._lookup("specular_color_texture", uv)
+        if texels is not None:
+            tint = np.asarray(self.specular_color, np.float64) * texels[:, :3]
+            points.f0 = np.minimum(self.dielectric_f0 * tint, 1.0)
         if self.clearcoat > 0:
             self._coat_at(points, uv, frames)
         if self.sheened:
@@ -502,6 +533,7 @@ class Gltf(Material):
             "m_clearcoat_normal_scale": float(self.clearcoat_normal_scale),
             "m_sheen": (*(float(c) for c in self.sheen_color), float(self.sheen_roughness)),
             "m_dielectric_f0": float(self.dielectric_f0),
+            "m_specular": (*(float(c) for c in self.specular_color), float(self.specular)),
         }
         for field, sampler, _, _ in SLOTS:
             ref = getattr(self, field)

@@ -12,8 +12,8 @@ What becomes what (docs/assets.md has the full table):
   vertices (reflets' meshes are stored in world space), the parsed file and its accessors are shared;
 - materials → ``type = "gltf"`` (Appendix B) with their textures (``TextureRef``: the glTF file and the image
   index, the sampler's wrap modes and filter, ``KHR_texture_transform``), ``KHR_materials_emissive_strength``,
-  ``KHR_materials_clearcoat``, ``KHR_materials_sheen``, ``KHR_materials_ior``, ``KHR_materials_unlit``; any other
-  material extension → a warning naming it (its base material is rendered);
+  ``KHR_materials_clearcoat``, ``KHR_materials_sheen``, ``KHR_materials_ior``, ``KHR_materials_specular``,
+  ``KHR_materials_unlit``; any other material extension → a warning naming it (its base material is rendered);
 - cameras → ``Camera`` (perspective, or orthographic with ``ortho_height`` = 2 ymag and the aspect xmag / ymag;
   ``--camera K`` picks one; default the first, else one framing the bounding box);
 - ``KHR_lights_punctual`` → point / directional lights, photometric units converted to radiometric ones at
@@ -44,7 +44,8 @@ ASSET_EXTENSIONS = (".gltf", ".glb", ".obj")
 LUMINOUS_EFFICACY = 683.0
 #: material extensions read into the ``gltf`` material
 SUPPORTED_MATERIAL_EXTENSIONS = {"KHR_materials_emissive_strength", "KHR_texture_transform", "KHR_materials_clearcoat",
-                                 "KHR_materials_sheen", "KHR_materials_ior", "KHR_materials_unlit"}  # fmt: skip
+                                 "KHR_materials_sheen", "KHR_materials_ior", "KHR_materials_unlit",
+                                 "KHR_materials_specular"}  # fmt: skip
 WRAPS = {10497: "repeat", 33071: "clamp", 33648: "mirror"}
 NEAREST_FILTERS = {9728, 9984, 9986}  # NEAREST, NEAREST_MIPMAP_NEAREST, NEAREST_MIPMAP_LINEAR (mag / min)
 
@@ -202,6 +203,9 @@ def _material(gltf: GltfFile, index: int, warnings: list[str], left_out: dict[st
         if not isinstance(ior, dict):
             raise SceneError(f"{where}.extensions.KHR_materials_ior: must be an object", file=gltf.path)
         out["ior"] = ior.get("ior", 1.5)
+    if "KHR_materials_specular" in extensions:
+        out |= _specular(gltf, extensions["KHR_materials_specular"], f"{where}.extensions.KHR_materials_specular",
+                         warnings)  # fmt: skip
     if "KHR_materials_sheen" in extensions:
         out |= _sheen(gltf, extensions["KHR_materials_sheen"], f"{where}.extensions.KHR_materials_sheen", warnings)
     mode = (m.alphaMode or "OPAQUE").lower()
@@ -263,6 +267,18 @@ def _sheen(gltf: GltfFile, sheen, where: str, warnings: list[str]) -> dict:
         "sheen_color_texture": _texture(gltf, info("sheenColorTexture"), where + ".sheenColorTexture", warnings),
         "sheen_roughness_texture": _texture(gltf, info("sheenRoughnessTexture"), where + ".sheenRoughnessTexture",
                                             warnings),  # fmt: skip
+    }
+
+
+def _specular(gltf: GltfFile, specular, where: str, warnings: list[str]) -> dict:
+    """KHR_materials_specular's weight (its texture's A) and Fresnel tint (its texture's RGB, sRGB)."""
+    info = _extension_textures(gltf, specular, where)
+    return {
+        "specular": specular.get("specularFactor", 1.0),
+        "specular_color": specular.get("specularColorFactor", (1.0, 1.0, 1.0)),
+        "specular_texture": _texture(gltf, info("specularTexture"), where + ".specularTexture", warnings),
+        "specular_color_texture": _texture(gltf, info("specularColorTexture"), where + ".specularColorTexture",
+                                           warnings),  # fmt: skip
     }
 
 

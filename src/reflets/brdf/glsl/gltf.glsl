@@ -13,6 +13,15 @@ uniform float m_occlusion_strength;
 uniform vec3 m_emissive;             // factor x emissive_strength
 uniform float m_alpha_cutoff;
 uniform float m_dielectric_f0;       // ((ior - 1) / (ior + 1))^2: 0.04 at glTF's 1.5 (KHR_materials_ior)
+uniform vec4 m_specular;             // KHR_materials_specular: Fresnel tint (RGB) and weight
+#if BRDF_GLTF_SPECULAR_MAP
+uniform sampler2D m_specular_map;
+uniform mat3 m_specular_map_uv;
+#endif
+#if BRDF_GLTF_SPECULAR_COLOR_MAP
+uniform sampler2D m_specular_color_map;
+uniform mat3 m_specular_color_map_uv;
+#endif
 // each texture with the mat3 taking mesh uv (v up) to image uv (origin top-left, KHR_texture_transform applied)
 #if BRDF_GLTF_BASE_MAP
 uniform sampler2D m_base_color_map;
@@ -77,6 +86,8 @@ float g_coat_alpha = 1.0;
 vec3 g_coat_n = vec3(0.0, 0.0, 1.0);
 float g_coat_normal_variance = 0.0;
 float g_normal_variance = 0.0;  // of the normal map under the footprint (Toksvig), added to alpha^2
+vec3 g_f0 = vec3(0.04);              // the dielectric's Fresnel at normal incidence and its weight
+float g_specular = 1.0;
 vec3 g_sheen = vec3(0.0);            // the sheen: colour and roughness (at least 0.07, as gltf.py)
 float g_sheen_roughness = 0.07;
 
@@ -117,6 +128,15 @@ void material_surface(vec2 uv, inout mat3 frame) {
 #endif
     g_metallic = mr.x;
     g_alpha = max(mr.y * mr.y, 1e-3);
+    g_specular = m_specular.a;
+#if BRDF_GLTF_SPECULAR_MAP
+    g_specular *= gltf_texel(m_specular_map, m_specular_map_uv, uv).a;
+#endif
+    vec3 tint = m_specular.rgb;
+#if BRDF_GLTF_SPECULAR_COLOR_MAP
+    tint *= gltf_texel(m_specular_color_map, m_specular_color_map_uv, uv).rgb;
+#endif
+    g_f0 = min(m_dielectric_f0 * tint, vec3(1.0));
     g_occlusion = 1.0;
 #if BRDF_GLTF_OCCLUSION_MAP
     g_occlusion = 1.0 + m_occlusion_strength * (gltf_texel(m_occlusion_map, m_occlusion_map_uv, uv).r - 1.0);
@@ -234,9 +254,10 @@ bool material_covered() {
 #endif
 }
 
-// The environment's split sum for this BRDF: its specular directional albedo F0 A + B (Schlick: F0 mixes the
-// dielectric's and the base colour by metallic) and the dielectric's diffuse albedo (1 - m) c (1 - F0_d) (1 - P),
-// P = the mean of (1 - v.h)^5 over the cosine-weighted hemisphere, both from the table at mu = n.v and the roughness.
+// The environment's split sum for this BRDF: its specular directional albedo F0 A + B (Schlick: the dielectric's
+// w (F0 A + B), the metal's c A + B, mixed by metallic) and the dielectric's diffuse albedo
+// (1 - m) c (1 - w (F0 + (1 - F0) P)) (F0 its largest channel), P = the mean of (1 - v.h)^5 over the cosine-weighted
+// hemisphere, both from the table at mu = n.v and the roughness.
 // A sheen scales both by 1 - max(C) E(mu) (the extension's simplified form for the environment) and adds its own
 // albedo C E(mu) to the diffuse one: its broad lobe lit by the irradiance (an approximation: the lobe leans to
 // grazing angles where the irradiance map's cosine does not; docs/assets.md measures it).
@@ -247,9 +268,9 @@ void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, o
     return;
 #endif
     vec3 abp = texture(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), sqrt(g_alpha))).rgb;
-    vec3 f0 = mix(vec3(m_dielectric_f0), g_base, g_metallic);
-    specular_albedo = f0 * abp.x + abp.y;
-    diffuse_albedo = (1.0 - g_metallic) * g_base * (1.0 - m_dielectric_f0) * (1.0 - abp.z);
+    specular_albedo = mix(g_specular * (g_f0 * abp.x + abp.y), g_base * abp.x + abp.y, g_metallic);
+    float f0_max = max(g_f0.r, max(g_f0.g, g_f0.b));  // max(F) = max(F0) + (1 - max(F0)) s: F grows with F0
+    diffuse_albedo = (1.0 - g_metallic) * g_base * (1.0 - g_specular * (f0_max + (1.0 - f0_max) * abp.z));
     alpha = g_alpha;
 #if BRDF_GLTF_SHEEN
     float sheen_albedo = gltf_sheen_albedo(mu);
@@ -305,9 +326,10 @@ vec3 brdf_eval(vec3 wo, vec3 wi) {
     vec3 h = normalize(wo + wi);
     float schlick = pow(1.0 - clamp(dot(wo, h), 0.0, 1.0), 5.0);
     float dv = gltf_d(h, g_alpha) / ((1.0 + gltf_lambda(wo, g_alpha) + gltf_lambda(wi, g_alpha)) * 4.0 * wo.z * wi.z);
-    float f_d = m_dielectric_f0 + (1.0 - m_dielectric_f0) * schlick;
+    vec3 f_d = g_f0 + (1.0 - g_f0) * schlick;  // Khronos' fresnel_mix: tinted, weighted by g_specular
+    float diffuse_weight = 1.0 - g_specular * max(f_d.r, max(f_d.g, f_d.b));
     vec3 f_m = g_base + (1.0 - g_base) * schlick;
-    vec3 value = (1.0 - g_metallic) * ((1.0 - f_d) * g_base * INV_PI + f_d * dv) + g_metallic * f_m * dv;
+    vec3 value = (1.0 - g_metallic) * (diffuse_weight * g_base * INV_PI + g_specular * f_d * dv) + g_metallic * f_m * dv;
 #if BRDF_GLTF_SHEEN
     value = gltf_sheened(value, wo, wi, h);
 #endif
