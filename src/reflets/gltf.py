@@ -169,13 +169,18 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
         if light.type in ("point", "directional"):
             power = light.intensity if light.type == "point" else light.irradiance
             peak = max(float(max(power)), 1e-30)
-            lights.append({"type": light.type, "color": [float(c) / peak for c in power], "intensity": peak,
-                           "name": f"light[{index}]"})  # fmt: skip
+            spot = light.spot if light.type == "point" else None
+            lights.append({"type": "spot" if spot else light.type, "color": [float(c) / peak for c in power],
+                           "intensity": peak, "name": f"light[{index}]"})  # fmt: skip
+            if spot is not None:
+                lights[-1]["spot"] = {"innerConeAngle": float(np.radians(spot.inner_deg)),
+                                      "outerConeAngle": float(np.radians(spot.outer_deg))}  # fmt: skip
             node = g.Node(name=f"light[{index}]", extensions={LIGHTS: {"light": len(lights) - 1}})
             if light.type == "point":
                 node.translation = [float(c) for c in light.position]
-            else:  # a glTF directional light shines along its node's −z
-                node.rotation = _rotation_to(np.asarray(light.direction, float))
+            if light.type == "directional" or spot is not None:  # glTF's lights shine along their node's −z
+                axis = light.direction if spot is None else spot.direction
+                node.rotation = _rotation_to(np.asarray(axis, float))
             nodes.append(node)
         elif light.type in ("quad", "polygon"):
             poly = np.asarray(light.polygon(), np.float32)

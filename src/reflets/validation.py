@@ -48,7 +48,8 @@ def analytic_image(scene: Scene, size: tuple[int, int] | None = None):
             d = np.asarray(light.position) - hit
             r2 = np.sum(d * d, axis=-1)
             cos = np.maximum(np.sum(d * normal, axis=-1) / np.sqrt(r2), 0.0)
-            radiance += rho / np.pi * np.asarray(light.intensity) * (cos / r2)[..., None]
+            cone = light.falloff((-d / np.sqrt(r2)[..., None]).reshape(-1, 3)).reshape(r2.shape)
+            radiance += rho / np.pi * np.asarray(light.intensity) * (cone * cos / r2)[..., None]
     elif isinstance(mesh, SphereMesh) and all(isinstance(light, DirectionalLight) for light in scene.light):
         if not np.allclose(scale, scale[0]):
             raise NotAnalytic("needs a uniformly scaled sphere")

@@ -120,6 +120,36 @@ def test_ior_and_unlit_read_and_checked(tmp_path):
         load(tmp_path / "b.gltf")
 
 
+def test_spot_light_read_with_its_cone(tmp_path):
+    """KHR_lights_punctual spot: a point light with a cone along its node's −z, the angles in degrees, no warning;
+    an inner angle not below the outer one is one line."""
+    import json
+    import shutil
+
+    for name in ("SheenTest.bin", "sheen.png"):
+        shutil.copy(ASSETS / "SheenTest" / name, tmp_path / name)
+    document = json.loads((ASSETS / "SheenTest" / "SheenTest.gltf").read_text("utf-8"))
+    document["extensionsUsed"].append("KHR_lights_punctual")
+    document["extensions"] = {"KHR_lights_punctual": {"lights": [
+        {"type": "spot", "intensity": 683.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}}]}}  # fmt: skip
+    document["nodes"].append({"translation": [0, 2, 0], "rotation": [-0.7071068, 0, 0, 0.7071068],  # −z → −y
+                              "extensions": {"KHR_lights_punctual": {"light": 0}}})  # fmt: skip
+    document["scenes"][0]["nodes"].append(len(document["nodes"]) - 1)
+    (tmp_path / "spot.gltf").write_text(json.dumps(document), "utf-8")
+    scene, said = load(tmp_path / "spot.gltf")
+    assert not said, said
+    (light,) = [light for light in scene.light if light.type == "point"]
+    assert light.intensity == pytest.approx((1.0, 1.0, 1.0)) and light.position == pytest.approx((0, 2, 0))
+    assert light.spot.inner_deg == pytest.approx(np.degrees(0.2)) and light.spot.outer_deg == pytest.approx(
+        np.degrees(0.5))  # fmt: skip
+    assert np.allclose(light.spot.direction, (0, -1, 0), atol=1e-6)
+    document["extensions"]["KHR_lights_punctual"]["lights"][0]["spot"] = {"innerConeAngle": 0.6,
+                                                                          "outerConeAngle": 0.5}  # fmt: skip
+    (tmp_path / "bad.gltf").write_text(json.dumps(document), "utf-8")
+    with pytest.raises(SceneError, match="inner_deg"):
+        load(tmp_path / "bad.gltf")
+
+
 def _linear(codes):
     from reflets.imageio import srgb_to_linear
 

@@ -231,3 +231,42 @@ def test_cutout_holes_let_light_through_in_the_shadow_maps_and_the_reference(tmp
         assert 0.35 < ratio < 0.65, ratio  # the holes' share of the light comes through
     blocks = lambda image: image.reshape(12, 8, 12, 8, 3).mean(axis=(1, 3))  # noqa: E731
     assert relmse(blocks(gpu), blocks(ref)) < 0.02  # measured 0.6 % (per pixel 4 %: PCF softens the stripes' edges)
+
+
+def test_spot_cone_falls_off_as_gltf_defines_it_in_both_renderers_and_round_trips(tmp_path, ctx):
+    """A point light with a glTF spot cone over a Lambert floor, a ball in its beam: the floor's radiance is the
+    isotropic light's × KHR_lights_punctual's t², t = (cos θ − cos θ_o) / (cos θ_i − cos θ_o) clamped to [0, 1]
+    (transcribed here); the GPU agrees with the reference (shadow included); export-gltf writes a spot light that
+    reads back as the same cone."""
+    from reflets.gltf import export_gltf
+
+    spot = {"direction": [0.3, -1.0, 0.1], "inner_deg": 15.0, "outer_deg": 35.0}
+    data = {
+        "camera": {"position": [0, 4, 0.01], "look_at": [0, 0, 0], "fov_y": 60, "size": [96, 96]},
+        "materials": {"floor": {"type": "lambert", "albedo": [0.7, 0.7, 0.7]}},
+        "mesh": [{"shape": "plane", "size": [6, 6], "material": "floor"}],
+        "light": [{"type": "point", "position": [0, 1.5, 0], "intensity": [5, 5, 5], "spot": spot}],
+    }
+    coned = reflets.render(reflets.load_dict(data), method="forward")
+    isotropic = reflets.render(reflets.load_dict({**data, "light": [{**data["light"][0], "spot": None}]}),
+                               method="forward")  # fmt: skip
+    floor = reflets.render(reflets.load_dict(data), method="position")
+    from_light = floor - np.array([0, 1.5, 0])
+    from_light /= np.linalg.norm(from_light, axis=-1, keepdims=True)
+    axis = np.array(spot["direction"]) / np.linalg.norm(spot["direction"])
+    cos_i, cos_o = np.cos(np.radians(15.0)), np.cos(np.radians(35.0))
+    expected = np.clip((from_light @ axis - cos_o) / (cos_i - cos_o), 0, 1) ** 2
+    inside = np.any(floor != 0, axis=-1)
+    assert np.allclose(coned[inside], isotropic[inside] * expected[inside][:, None], rtol=1e-3, atol=1e-5)
+    assert (expected[inside] == 0).sum() > 100 and (expected[inside] == 1).sum() > 100  # both sides of the cone
+    ball = {"shape": "sphere", "radius": 0.2, "material": "floor", "transform": {"translate": [0.2, 0.6, 0]}}
+    scene = reflets.load_dict({**data, "mesh": [*data["mesh"], ball]})
+    gpu = reflets.render(scene, method="forward")
+    ref = reflets.reference(scene, spp=4, progress=False).image
+    blocks = lambda image: image.reshape(12, 8, 12, 8, 3).mean(axis=(1, 3))  # noqa: E731
+    assert relmse(blocks(gpu), blocks(ref)) < 0.02
+    path, _ = export_gltf(reflets.load_dict(data), tmp_path / "spot.glb")
+    light = next(light for light in reflets.load_scene(path).light if light.type == "point")
+    assert light.spot is not None
+    assert light.spot.inner_deg == pytest.approx(15.0) and light.spot.outer_deg == pytest.approx(35.0)
+    assert np.allclose(np.array(light.spot.direction) / np.linalg.norm(light.spot.direction), axis, atol=1e-6)

@@ -404,6 +404,9 @@ def to_mitsuba_dict(
         out[f"mesh_{i}"] = {"type": "ply", "filename": str(path), "face_normals": False, "bsdf": bsdfs[mesh.material]}
 
     for i, light in enumerate(scene.light):
+        if isinstance(light, PointLight) and light.spot is not None:
+            raise ArgumentError(f"light[{i}].spot: Mitsuba's spot light falls off its own way (not glTF's): the bridge "
+                                "takes isotropic point lights", field=f"light[{i}].spot")  # fmt: skip
         if isinstance(light, PointLight):
             out[f"light_{i}"] = {"type": "point", "position": list(light.position), "intensity": _rgb(light.intensity)}
         elif isinstance(light, DirectionalLight):

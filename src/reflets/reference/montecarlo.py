@@ -267,7 +267,7 @@ class MonteCarloReference:
                 d = np.asarray(light.position) - x
                 dist = np.linalg.norm(d, axis=-1)
                 wi = d / dist[:, None]
-                radiance = np.asarray(light.intensity) / (dist * dist)[:, None]
+                radiance = np.asarray(light.intensity) * (light.falloff(-wi) / (dist * dist))[:, None]
             else:
                 wi = np.broadcast_to(-np.asarray(light.direction) / np.linalg.norm(light.direction), x.shape)
                 dist = np.full(len(x), 2.0 * geo.radius + np.linalg.norm(x - geo.centre, axis=-1))

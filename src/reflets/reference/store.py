@@ -43,14 +43,15 @@ PRESENTATION_KEYS = ("title", "description")
 def _digest(description: dict) -> str:
     """The digest of what determines the image: the description without its presentation keys, and without
     keys at the default that reproduces how older references were made (a light's ``shadows = true``: traced; a
-    centred camera with square pixels), so that editing a caption or adding such a field keeps stored references
-    valid (one of them took 38 minutes)."""
+    point light without a ``spot`` cone; a centred camera with square pixels), so that editing a caption or adding
+    such a field keeps stored references valid (one of them took 38 minutes)."""
     scene = {k: v for k, v in description["scene"].items() if k not in PRESENTATION_KEYS}
     scene["mesh"] = [  # a mesh's glTF part: None (added later) for every file mesh made before
         {k: v for k, v in mesh.items() if not (k == "part" and v is None)} for mesh in scene.get("mesh", [])
     ]
-    scene["light"] = [
-        {k: v for k, v in light.items() if not (k == "shadows" and v is True)} for light in scene.get("light", [])
+    scene["light"] = [  # and a point light's spot cone: None (added later) for every light made before
+        {k: v for k, v in light.items() if not (k == "shadows" and v is True) and not (k == "spot" and v is None)}
+        for light in scene.get("light", [])
     ]
     if "camera" in scene:  # a calibrated or orthographic camera's fields, at the pinhole older references had
         scene["camera"] = {k: v for k, v in scene["camera"].items() if (k, v) not in _CENTRED_CAMERA}

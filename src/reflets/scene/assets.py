@@ -18,7 +18,7 @@ What becomes what (docs/assets.md has the full table):
   ``--camera K`` picks one; default the first, else one framing the bounding box);
 - ``KHR_lights_punctual`` → point / directional lights, photometric units converted to radiometric ones at
   683 lm/W (the luminous efficacy of 555 nm light, as Blender's glTF importer does): W/sr = cd / 683,
-  W/m² = lx / 683; spot lights → point lights without their cone (warned); ``range`` is ignored (the
+  W/m² = lx / 683; spot lights → point lights with a ``spot`` cone; ``range`` is ignored (the
   specification allows it);
 - no light in the file → the environment map given, or the studio map shipped with reflets
   (``data/environments/studio.hdr``, Poly Haven's brown_photostudio_02), shown as the background.
@@ -358,13 +358,29 @@ def _lights(gltf: GltfFile, warnings: list[str]) -> list[dict]:
         if kind == "directional":
             out.append({"type": "directional", "direction": tuple(map(float, forward)), "irradiance": power})
             continue
-        if kind == "spot":
-            warnings.append(f"{gltf.path.name}: spot light '{name}' rendered as a point light (no cone yet)")
-        elif kind != "point":
+        if kind not in ("point", "spot"):
             warnings.append(f"{gltf.path.name}: light '{name}' of type {kind!r} skipped")
             continue
-        out.append({"type": "point", "position": tuple(map(float, position)), "intensity": power})
+        point = {"type": "point", "position": tuple(map(float, position)), "intensity": power}
+        if kind == "spot":
+            point["spot"] = _spot(gltf, light.get("spot") or {}, f"extensions.KHR_lights_punctual.lights[{ref}].spot",
+                                  tuple(map(float, forward)))  # fmt: skip
+        out.append(point)
     return out
+
+
+def _spot(gltf: GltfFile, spot, where: str, forward: tuple[float, float, float]) -> dict:
+    """A spot light's cone along its node's −z: glTF's angles (radians) in degrees (validated by ``SpotCone``)."""
+    if not isinstance(spot, dict):
+        raise SceneError(f"{where}: must be an object", file=gltf.path)
+
+    def degrees(key: str, default: float):
+        value = spot.get(key, default)
+        is_number = isinstance(value, int | float) and not isinstance(value, bool)
+        return math.degrees(value) if is_number and math.isfinite(value) else value  # else: the model says why
+
+    return {"direction": forward, "inner_deg": degrees("innerConeAngle", 0.0),
+            "outer_deg": degrees("outerConeAngle", math.pi / 4)}  # fmt: skip
 
 
 # ---------------------------------------------------------------------------------------------- geometry

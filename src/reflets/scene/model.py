@@ -267,13 +267,54 @@ Mesh = Annotated[
 ]
 
 
+class SpotCone(Strict):
+    """A point light's cone (glTF's spot light): full intensity within ``inner_deg`` of ``direction``, none beyond
+    ``outer_deg``, between them KHR_lights_punctual's smooth falloff t² with t = (cos θ − cos θ_o) / (cos θ_i −
+    cos θ_o) (the specification's recommended form, as Khronos' sample viewer and three.js draw it)."""
+
+    direction: Vec3
+    inner_deg: Annotated[float, Field(ge=0, lt=90, allow_inf_nan=False)] = 0.0
+    outer_deg: Annotated[float, Field(gt=0, le=90, allow_inf_nan=False)] = 45.0
+
+    @field_validator("direction")
+    @classmethod
+    def _non_zero(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
+        if not np.any(v):
+            raise ValueError("direction must not be the zero vector")
+        return v
+
+    @model_validator(mode="after")
+    def _ordered(self) -> SpotCone:
+        if self.inner_deg >= self.outer_deg:
+            raise ValueError(f"inner_deg ({self.inner_deg:g}) must be less than outer_deg ({self.outer_deg:g})")
+        return self
+
+    def scale_offset(self) -> tuple[float, float]:
+        """(s, o) with t = clamp(cos θ · s + o, 0, 1): KHR_lights_punctual's angular attenuation before squaring."""
+        cos_inner, cos_outer = np.cos(np.radians(self.inner_deg)), np.cos(np.radians(self.outer_deg))
+        scale = 1.0 / max(1e-3, cos_inner - cos_outer)
+        return float(scale), float(-cos_outer * scale)
+
+    def falloff(self, from_light: np.ndarray) -> np.ndarray:
+        """The attenuation (N,) along unit directions (N, 3) from the light."""
+        axis = np.asarray(self.direction, np.float64) / np.linalg.norm(self.direction)
+        scale, offset = self.scale_offset()
+        return np.clip(from_light @ axis * scale + offset, 0.0, 1.0) ** 2
+
+
 class PointLight(Strict):
-    """Isotropic point light; ``intensity`` is radiant intensity (W/sr) per RGB channel."""
+    """Point light; ``intensity`` is radiant intensity (W/sr) per RGB channel, isotropic or, with ``spot``, within
+    a cone."""
 
     type: Literal["point"]
     position: Vec3
     intensity: Color
     shadows: bool = Field(True, description="casts shadows (GPU: a cube shadow map; the reference: shadow rays)")
+    spot: SpotCone | None = Field(None, description="a cone (glTF spot light): direction, inner_deg, outer_deg")
+
+    def falloff(self, from_light: np.ndarray) -> np.ndarray:
+        """The intensity's angular factor (N,) along unit directions (N, 3) from the light (1 without a cone)."""
+        return np.ones(len(from_light)) if self.spot is None else self.spot.falloff(from_light)
 
 
 class DirectionalLight(Strict):

@@ -17,9 +17,10 @@ What it computes, exactly or not:
   (llvmpipe shades vertices on one thread: a second pass over 150k triangles is not free), so their meshes
   are drawn once as before.
 
-Buffer layouts (std430, vec4 each): points (position, intensity); directional (unit vector towards the
-light, irradiance); area samples (point, dA), (light normal, two_sided), (radiance, 0); environment
-(direction, radiance × solid angle).
+Buffer layouts (std430, vec4 each): points (position, cone scale), (intensity, shadow view + 1), (cone axis, cone
+offset) — the cone's t = clamp(cos θ · scale + offset, 0, 1), squared (scale 0, offset 1 without a cone);
+directional (unit vector towards the light, irradiance); area samples (point, dA), (light normal, two_sided),
+(radiance, 0); environment (direction, radiance × solid angle).
 """
 
 from __future__ import annotations
@@ -225,7 +226,11 @@ class Forward(Technique):
         shadows = self.prepared.shadows
         for light in scene.light:  # w of a delta light's second row: its first shadow view + 1 (0: no shadow)
             if isinstance(light, PointLight):
-                points_l += [(*light.position, 1.0), (*light.intensity, shadows.view_index(light) + 1.0)]
+                scale, offset = light.spot.scale_offset() if light.spot is not None else (0.0, 1.0)
+                axis = np.asarray(light.spot.direction if light.spot is not None else (0.0, 0.0, 0.0), np.float64)
+                axis = axis / max(np.linalg.norm(axis), 1e-300)
+                points_l += [(*light.position, scale), (*light.intensity, shadows.view_index(light) + 1.0),
+                             (*axis, offset)]  # fmt: skip
             elif isinstance(light, DirectionalLight):
                 d = -np.asarray(light.direction, dtype=np.float64)
                 dirs += [
@@ -251,7 +256,7 @@ class Forward(Technique):
         # iterations, so a loop over an absent light type cost as much as one light (measured: 3 empty loops
         # with a GGX BRDF doubled the frame time of one point light).
         self._light_flags = {
-            "N_POINT": len(points_l) // 2,
+            "N_POINT": len(points_l) // 3,
             "N_DIR": len(dirs) // 2,
             "N_AREA": len(area) // 3,
             "N_AREA_LIGHTS": len(runs),

@@ -134,6 +134,9 @@ class Translucency(Forward):
                 f"the translucent technique needs exactly one point or directional light (got: {kinds})",
                 field="light",
             )
+        if getattr(scene.light[0], "spot", None) is not None:
+            raise ArgumentError("the translucent technique lights by an isotropic point light: drop its spot cone",
+                                field="light[0].spot")  # fmt: skip
         super().prepare(scene)
 
     def material_shadings(self, scene: Scene) -> list:

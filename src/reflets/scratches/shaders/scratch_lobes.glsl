@@ -117,11 +117,11 @@ vec3 scratched_radiance(vec3 x, mat3 frame, vec3 wo, vec2 uv, uvec2 pixel) {
         uint rng = rng_seed(pixel, u_frame, u_seed);
 #if N_POINT > 0
         for (int i = 0; i < N_POINT; ++i) {
-            vec3 d = point_data[2 * i].xyz - x;
+            vec3 d = point_data[POINT_STRIDE * i].xyz - x;
             float r2 = dot(d, d);
-            float v = point_visibility(i, x, frame[2]);
+            float v = point_visibility(i, x, frame[2]) * point_cone(i, -d * inversesqrt(r2));
             if (v <= 0.0) continue;
-            sum += thick_light(wo, transpose(frame) * (d * inversesqrt(r2)), point_data[2 * i + 1].rgb * (v / r2), norm, rng);
+            sum += thick_light(wo, transpose(frame) * (d * inversesqrt(r2)), point_data[POINT_STRIDE * i + 1].rgb * (v / r2), norm, rng);
         }
 #endif
 #if N_DIR > 0

@@ -1,6 +1,15 @@
 // Provides direct_lighting(x, frame, wo): point, directional, sampled area and environment lights.
 // Light data arrive in std430 buffers filled by reflets/techniques/forward.py (layouts documented there).
-layout(std430, binding = 0) readonly buffer PointLights { vec4 point_data[]; };   // position, intensity
+layout(std430, binding = 0) readonly buffer PointLights { vec4 point_data[]; };   // (position, cone scale), (intensity, shadow view + 1), (cone axis, cone offset)
+const int POINT_STRIDE = 3;
+
+// A point light's cone (glTF spot light, KHR_lights_punctual's smooth falloff): t^2, t = clamp(cos * scale + offset)
+// along the direction from the light; 1 for an isotropic light (scale 0, offset 1).
+float point_cone(int i, vec3 from_light) {
+    float t = clamp(dot(point_data[POINT_STRIDE * i + 2].xyz, from_light) * point_data[POINT_STRIDE * i].w
+                    + point_data[POINT_STRIDE * i + 2].w, 0.0, 1.0);
+    return t * t;
+}
 layout(std430, binding = 1) readonly buffer DirLights { vec4 dir_data[]; };       // (to-light dir, shadow cascades), (irradiance, first shadow view + 1)
 layout(std430, binding = 2) readonly buffer AreaSamples { vec4 area_data[]; };    // (y, dA), (n_L, two_sided), (L, 0)
 #if N_AREA > 0
@@ -72,14 +81,15 @@ vec3 direct_lighting(vec3 x, mat3 frame, vec3 wo) {
     vec3 sum = vec3(0.0);
 #if N_POINT > 0
     for (int i = 0; i < N_POINT; ++i) {
-        vec3 d = point_data[2 * i].xyz - x;
+        vec3 d = point_data[POINT_STRIDE * i].xyz - x;
         float r2 = dot(d, d);
         vec3 wi = d * inversesqrt(r2);
         float cos_x = dot(n, wi);
-        if (cos_x <= 0.0) continue;
+        float cone = point_cone(i, -wi);
+        if (cos_x <= 0.0 || cone <= 0.0) continue;
         float v = point_visibility(i, x, n);
         if (v <= 0.0) continue;
-        sum += brdf_eval(wo, to_local * wi) * point_data[2 * i + 1].rgb * (v * cos_x / r2);
+        sum += brdf_eval(wo, to_local * wi) * point_data[POINT_STRIDE * i + 1].rgb * (cone * v * cos_x / r2);
     }
 #endif
 #if N_DIR > 0

@@ -68,9 +68,9 @@ vec3 normal_offset(vec3 x, vec3 n, vec3 wi, float texel_size) {
 }
 
 float point_visibility(int i, vec3 x, vec3 n) {
-    int view = int(point_data[2 * i + 1].w) - 1;
+    int view = int(point_data[POINT_STRIDE * i + 1].w) - 1;
     if (view < 0) return 1.0;
-    vec3 light = point_data[2 * i].xyz;
+    vec3 light = point_data[POINT_STRIDE * i].xyz;
     vec3 d = x - light;
     vec3 a = abs(d);
     // the cube face by the major axis, in the order +x, −x, +y, −y, +z, −z (shadows.py)
