@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
 
 from ..quantities import Finite, NonNeg, Positive
 
@@ -267,21 +267,24 @@ Mesh = Annotated[
 ]
 
 
+def _non_zero(v: tuple[float, float, float]) -> tuple[float, float, float]:
+    if not np.any(v):
+        raise ValueError("direction must not be the zero vector")
+    return v
+
+
+#: a direction (any length but zero)
+Direction = Annotated[Vec3, AfterValidator(_non_zero)]
+
+
 class SpotCone(Strict):
     """A point light's cone (glTF's spot light): full intensity within ``inner_deg`` of ``direction``, none beyond
     ``outer_deg``, between them KHR_lights_punctual's smooth falloff t² with t = (cos θ − cos θ_o) / (cos θ_i −
     cos θ_o) (the specification's recommended form, as Khronos' sample viewer and three.js draw it)."""
 
-    direction: Vec3
+    direction: Direction
     inner_deg: Annotated[float, Field(ge=0, lt=90, allow_inf_nan=False)] = 0.0
     outer_deg: Annotated[float, Field(gt=0, le=90, allow_inf_nan=False)] = 45.0
-
-    @field_validator("direction")
-    @classmethod
-    def _non_zero(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
-        if not np.any(v):
-            raise ValueError("direction must not be the zero vector")
-        return v
 
     @model_validator(mode="after")
     def _ordered(self) -> SpotCone:
@@ -322,16 +325,9 @@ class DirectionalLight(Strict):
     surface facing it (W/m²)."""
 
     type: Literal["directional"]
-    direction: Vec3
+    direction: Direction
     irradiance: Color
     shadows: bool = Field(True, description="casts shadows (GPU: a shadow map over the scene; the reference: rays)")
-
-    @field_validator("direction")
-    @classmethod
-    def _non_zero(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
-        if not np.any(v):
-            raise ValueError("direction must not be the zero vector")
-        return v
 
 
 class QuadLight(Strict):
