@@ -106,13 +106,17 @@ def material_to_gltf(name: str, material) -> tuple[dict, list[str]]:
     return gltf, notes
 
 
-def _gltf_camera(g, cam):
-    """The scene camera as a glTF camera (orthographic: xmag / ymag are half the view window's width / height)."""
+def _gltf_camera(g, cam, boxes: np.ndarray):
+    """The scene camera as a glTF camera (orthographic: xmag / ymag are half the view window's width / height, its
+    required zfar the renderer's own: ``camera_range`` of the meshes' boxes — a far plane beyond them would spend
+    the linear depth's float32 precision on empty space)."""
+    from .scene.geometry import camera_range
+
     if cam.orthographic:
         ymag = cam.ortho_height / 2.0
         xmag = ymag * cam.size[0] / cam.size[1] / cam.pixel_aspect
-        zfar = cam.far if cam.far is not None else 1e6
-        return g.Camera(type="orthographic", orthographic=g.Orthographic(xmag=xmag, ymag=ymag, znear=cam.near or 0.0,
+        znear, zfar = camera_range(cam, boxes)
+        return g.Camera(type="orthographic", orthographic=g.Orthographic(xmag=xmag, ymag=ymag, znear=znear,
                                                                           zfar=zfar))  # fmt: skip
     perspective = g.Perspective(yfov=math.radians(cam.fov_y), aspectRatio=cam.size[0] / cam.size[1], znear=0.01)
     return g.Camera(type="perspective", perspective=perspective)
@@ -149,9 +153,10 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
         material, found = material_to_gltf(name, scene.materials[name])
         materials.append(material)
         notes += found
-    meshes, nodes = [], []
+    meshes, nodes, boxes = [], [], []
     for index, mesh in enumerate(scene.mesh):
         data = mesh_data(scene, index)
+        boxes.append((data.positions.min(axis=0), data.positions.max(axis=0)))
         attributes = g.Attributes(
             POSITION=add(data.positions.astype(np.float32), g.ARRAY_BUFFER, g.VEC3, g.FLOAT, bounds=True),
             NORMAL=add(data.normals.astype(np.float32), g.ARRAY_BUFFER, g.VEC3, g.FLOAT),
@@ -217,7 +222,7 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
         accessors=accessors,
         bufferViews=views,
         buffers=[g.Buffer(byteLength=len(blob))],
-        cameras=[_gltf_camera(g, cam)],
+        cameras=[_gltf_camera(g, cam, np.asarray(boxes, np.float64).reshape(-1, 2, 3))],
         extensionsUsed=used,
         extensions={LIGHTS: {"lights": lights}} if lights else {},
     )

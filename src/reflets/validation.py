@@ -28,6 +28,8 @@ def analytic_image(scene: Scene, size: tuple[int, int] | None = None):
     material = scene.materials[mesh.material]
     if material.type != "lambert" or mesh.transform.rotate != (0.0, 0.0, 0.0):
         raise NotAnalytic("needs an unrotated Lambert mesh")
+    if scene.camera.orthographic:
+        raise NotAnalytic("needs a perspective camera")
     rho = np.asarray(material.albedo)
     origin, dirs = pixel_rays(scene.camera, size)
     t_centre = np.asarray(mesh.transform.translate, dtype=np.float64)

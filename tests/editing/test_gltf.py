@@ -98,7 +98,8 @@ def test_cameras_export_and_read_back_both_projections(tmp_path):
         back = reflets.load_scene(path).camera
         assert back.projection == camera.get("projection", "perspective")
         assert back.size[0] / back.size[1] == pytest.approx(64 / 48, abs=0.01)
-        if back.orthographic:
+        if back.orthographic:  # its required far plane just behind the sphere (3.5 away), not at 10^6
             assert back.ortho_height == pytest.approx(1.5)
+            assert 3.5 <= back.far < 4.0, back.far
         else:
             assert back.fov_y == pytest.approx(30)

@@ -162,10 +162,11 @@ def test_reflected_rays_leave_their_own_tessellation(shape):
     hit the reflector's own triangles at about the chord sag; lifted onto the hit triangle, none should."""
     from reflets.reference.mirrors import _above_mesh
     from reflets.reference.montecarlo import MonteCarloReference
+    from reflets.scene.camera import camera_rays
 
     ref = MonteCarloReference(curved_scene(shape), visibility=False)
     rows, cols = np.divmod(np.arange(SIZE[0] * SIZE[1]), SIZE[0])
-    origin, dirs = ref._camera_rays(rows + 0.5, cols + 0.5, *SIZE)
+    origin, dirs = camera_rays(ref.scene.camera, cols + 0.5, rows + 0.5, *SIZE)
     hits = ref.geometry.intersect(np.broadcast_to(origin, dirs.shape), dirs)
     on = np.nonzero((hits.kind == MESHES) & (ref.geometry.face_mesh[np.maximum(hits.prim, 0)] == 0))[0]
     d = dirs[on]

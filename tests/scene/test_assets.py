@@ -143,6 +143,11 @@ def test_spot_light_read_with_its_cone(tmp_path):
     assert light.spot.inner_deg == pytest.approx(np.degrees(0.2)) and light.spot.outer_deg == pytest.approx(
         np.degrees(0.5))  # fmt: skip
     assert np.allclose(light.spot.direction, (0, -1, 0), atol=1e-6)
+    document["materials"][1]["extensions"]["KHR_materials_sheen"]["sheenColorTexture"] = {"index": "0"}
+    (tmp_path / "index.gltf").write_text(json.dumps(document), "utf-8")
+    with pytest.raises(SceneError, match="sheenColorTexture.index: must be a texture index"):
+        load(tmp_path / "index.gltf")  # a string index: one line (an extension's textureInfo is raw JSON)
+    document["materials"][1]["extensions"]["KHR_materials_sheen"]["sheenColorTexture"] = {"index": 0}
     document["extensions"]["KHR_lights_punctual"]["lights"][0]["spot"] = {"innerConeAngle": 0.6,
                                                                           "outerConeAngle": 0.5}  # fmt: skip
     (tmp_path / "bad.gltf").write_text(json.dumps(document), "utf-8")

@@ -72,3 +72,19 @@ def test_depth_prepass_shades_the_nearest_surface_only_with_the_same_image(monke
     without = reflets.render(scene, method="forward")
     assert np.array_equal(with_prepass, without)
     assert with_prepass.mean() > 0.01 and np.ptp(with_prepass) > 0.5  # an image, not a cleared target
+
+
+def test_texture_anisotropy_is_each_renderers_own():
+    """Two renderers on one context share the helmet's textures: the second one's texture_anisotropy must not
+    change the first one's frames (it did when prepare set it on the shared textures)."""
+    from reflets.scene.assets import asset_path
+
+    scene = reflets.load_scene(asset_path("DamagedHelmet/DamagedHelmet.glb"))
+    scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"size": (96, 72)})})
+    with reflets.Renderer(scene, texture_anisotropy=1.0) as trilinear:
+        first = trilinear.render()
+        with reflets.Renderer(scene, texture_anisotropy=16.0) as anisotropic:
+            sharp = anisotropic.render()
+            again = trilinear.render()
+    assert not np.array_equal(first, sharp)  # the setting matters for this view
+    np.testing.assert_array_equal(first, again)

@@ -87,6 +87,20 @@ def test_a_click_picks_what_the_pixel_shows(controller):
     assert controller.selection is None
 
 
+def test_an_orthographic_camera_picks_along_its_parallel_rays(ctx):
+    """Under an orthographic camera each pixel's ray starts at its own point on the view window: the ball and the
+    floor are picked where they show (a pick from the camera's one position hit the ball from every pixel)."""
+    camera = {**SCENE["camera"], "projection": "orthographic", "ortho_height": 3.0}
+    controller = ViewerController(reflets.load_dict({**SCENE, "camera": camera}), method="forward")
+    try:
+        for point, picked in (([0, 0.5, 0], ("mesh", 1)), ([2.5, 0, 2.0], ("mesh", 0))):
+            x, y = pixel_of(controller, point)
+            controller.handle({"type": "pick", "x": x, "y": y})
+            assert controller.selection == picked
+    finally:
+        controller.release()
+
+
 def test_a_drag_orbits_instead_of_picking(controller):
     before = controller.scene.camera.position
     controller.handle({"type": "pointer", "action": "down", "x": 40, "y": 30})

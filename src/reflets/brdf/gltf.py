@@ -391,7 +391,7 @@ class Gltf(Material):
         """Only a pure metal: Appendix B weighs the dielectric's diffuse lobe by 1 − F at the half vector, not by
         what the specular lobe takes, so at grazing views the two add up to more than 1 (the white furnace
         measures 1.31 at θo = 1.4 for base colour 0.95, roughness 0.05 — the specification's, not a bug here)."""
-        return self.metallic == 1.0
+        return self.metallic == 1.0 and not self.sheened  # a smooth sheen's albedo exceeds 1 at grazing views
 
     def lobe_summary(self):
         diffuse = tuple(float(c) * (1.0 - self.metallic) * (1.0 - self.dielectric_f0) for c in self.base_color[:3])
@@ -516,8 +516,8 @@ class Gltf(Material):
     def flags(self) -> dict[str, object]:
         return {flag: int(getattr(self, field) is not None) for field, _, _, flag in SLOTS} | {
             "BRDF_GLTF_MASK": int(self.alpha_mode == "mask"),
-            "BRDF_GLTF_COAT": int(self.clearcoat > 0),
-            "BRDF_GLTF_SHEEN": int(self.sheened),
+            "BRDF_GLTF_COAT": int(self.clearcoat > 0 and not self.unlit),  # unlit: no layer reflects either
+            "BRDF_GLTF_SHEEN": int(self.sheened and not self.unlit),
             "BRDF_GLTF_UNLIT": int(self.unlit),
         }
 

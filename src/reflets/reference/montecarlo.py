@@ -198,7 +198,7 @@ class MonteCarloReference:
         rows = np.repeat(ids // width, spp)
         cols = np.repeat(ids % width, spp)
         jitter = u[:, -2:] if pixel == "box" else np.full((len(u), 2), 0.5)
-        origin, dirs = self._camera_rays(rows + jitter[:, 1], cols + jitter[:, 0], width, height)
+        origin, dirs = camera_rays(self.scene.camera, cols + jitter[:, 0], rows + jitter[:, 1], width, height)
         out = self.trace(origin, dirs, u, mirrors=True)
         return out.reshape(len(ids), spp, 3)
 
@@ -219,12 +219,6 @@ class MonteCarloReference:
             if mirrors and self.mirrors:
                 out[on_mesh] += self.mirrors.radiance(self, on_mesh, hits, origin, dirs, u)
         return out
-
-    def _camera_rays(self, rows: np.ndarray, cols: np.ndarray, width: int, height: int):
-        """One origin (perspective) or one per ray (orthographic), and unit directions."""
-        cam = self.scene.camera
-        origins, dirs = camera_rays(cam, cols, rows, width, height)
-        return (origins if cam.orthographic else np.asarray(cam.position, dtype=np.float64)), dirs
 
     def _escaped(self, dirs: np.ndarray) -> np.ndarray:
         if self.env is not None and self.background is None:

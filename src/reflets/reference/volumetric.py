@@ -177,6 +177,9 @@ def _check_volumetric_scene(scene):
         )
     if getattr(lights[0], "mask", None) is not None:
         raise ArgumentError("the volumetric reference takes quad lights without a mask", field="light[0].mask")
+    if scene.camera.orthographic:
+        raise ArgumentError("the volumetric reference traces from a pinhole: the camera must be perspective",
+                            field="camera.projection")  # fmt: skip
     if getattr(lights[0], "spot", None) is not None:
         raise ArgumentError("the volumetric reference takes isotropic point lights: drop the spot cone",
                             field="light[0].spot")  # fmt: skip

@@ -134,7 +134,9 @@ def _texture(gltf: GltfFile, info, where: str, warnings: list[str]) -> dict | No
         return None
     textures = gltf.doc.textures or []
     index = info.index
-    if index is None or not 0 <= index < len(textures):
+    if not isinstance(index, int) or isinstance(index, bool):
+        raise SceneError(f"{where}.index: must be a texture index (an integer), got {index!r}", file=gltf.path)
+    if not 0 <= index < len(textures):
         raise SceneError(f"{where}.index: textures[{index}] does not exist", file=gltf.path)
     texture = textures[index]
     source = texture.source

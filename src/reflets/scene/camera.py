@@ -48,7 +48,8 @@ def _image_plane(camera: Camera, columns, rows, width: int, height: int) -> tupl
 
 def camera_rays(camera: Camera, columns, rows, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
     """World ray origins and unit directions (…, 3) through continuous pixel positions (x = columns, y = rows
-    from the top-left corner), for either projection."""
+    from the top-left corner), for either projection; the origin is the camera's position (3,) for a perspective
+    camera (it broadcasts against the directions), one point per ray for an orthographic one."""
     basis = camera_basis(camera)
     x, y = np.broadcast_arrays(*_image_plane(camera, columns, rows, width, height))
     position = np.asarray(camera.position, np.float64)
@@ -57,7 +58,7 @@ def camera_rays(camera: Camera, columns, rows, width: int, height: int) -> tuple
         return origins, np.broadcast_to(-basis[2], origins.shape).copy()
     dirs = np.stack([x, y, -np.ones_like(x)], axis=-1) @ basis
     dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
-    return np.broadcast_to(position, dirs.shape).copy(), dirs
+    return position, dirs
 
 
 def pixel_rays(camera: Camera, size: tuple[int, int] | None = None, offsets=(0.5, 0.5)):
@@ -65,8 +66,7 @@ def pixel_rays(camera: Camera, size: tuple[int, int] | None = None, offsets=(0.5
     camera's position (3,) for a perspective camera, one point per pixel (H, W, 3) for an orthographic one."""
     width, height = size or camera.size
     columns, rows = (np.arange(width) + offsets[0])[None, :], (np.arange(height) + offsets[1])[:, None]
-    origins, dirs = camera_rays(camera, columns, rows, width, height)
-    return (origins if camera.orthographic else np.asarray(camera.position, dtype=np.float64)), dirs
+    return camera_rays(camera, columns, rows, width, height)
 
 
 def project(camera: Camera, points: np.ndarray, size: tuple[int, int] | None = None) -> np.ndarray:

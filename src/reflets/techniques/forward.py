@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Annotated, ClassVar, Literal
+from typing import Annotated, ClassVar, Literal, NamedTuple
 
 import moderngl
 import numpy as np
@@ -191,6 +191,21 @@ class PassRole:
 WHOLE_FRAME = PassRole()
 
 
+class MeshDraw(NamedTuple):
+    """How one mesh is shaded: its program and vertex array, uniforms, textures (the material's, ``filtered``
+    those whose sampling the renderer's ``texture_anisotropy`` sets; the shading's own), its shading, and its
+    depth pre-pass vertex array (None: drawn once, writing its depths)."""
+
+    program: object
+    vao: object
+    uniforms: dict
+    material_textures: dict
+    own_textures: dict
+    shading: MaterialShading | None
+    depth_vao: object
+    filtered: list
+
+
 @register_technique
 class Forward(Technique):
     """Direct lighting by forward shading (the engine's baseline; see the module docstring)."""
@@ -282,6 +297,9 @@ class Forward(Technique):
                 self._draws.append(None)  # another pass of a composed frame shades this mesh
                 continue
             self._draws.append(self._mesh_draw(index, scene.materials[mesh.material]))
+        self._shaded = [draw for draw in self._draws if draw is not None]
+        self._early = {k for k, draw in enumerate(self._shaded) if draw.depth_vao is not None}
+        self._depth_program = get_program(ctx, DEPTH_PROGRAM) if self._early else None
 
         self._background = get_program(ctx, BACKGROUND_PROGRAM)
         self._background_vao = ctx.vertex_array(self._background, [])
@@ -289,9 +307,8 @@ class Forward(Technique):
         self._near, self._far = camera_range(scene.camera, self.prepared.boxes)
         self.timer = FrameTimer(ctx)
 
-    def _mesh_draw(self, index: int, material) -> tuple:
-        """(program, vertex array, uniforms, material textures, shading textures, shading) of one mesh: drawn
-        with the shading of its material's type, or this technique's own BRDF shading."""
+    def _mesh_draw(self, index: int, material) -> MeshDraw:
+        """How one mesh is drawn: with the shading of its material's type, or this technique's own BRDF shading."""
         ctx = self.ctx
         shading = shading_for(material, self.shadings)
         spec = self.program_spec if shading is None else shading.program
@@ -308,12 +325,13 @@ class Forward(Technique):
         if self._ibl is not None:
             uniforms.update(self._ibl.uniforms(material))
         textures = material.textures(ctx)
-        for texture in textures.values():  # shared by a context's renderers: the last one prepared sets it
-            if texture.filter[0] == moderngl.LINEAR_MIPMAP_LINEAR:  # the images' (not the split-sum table)
-                texture.anisotropy = self.params.texture_anisotropy
-        early = material.textured and spec.vertex == MESH_VERT and not material.cutout and not self.role.additive
+        # the images (not the split-sum table): their anisotropy is set at each draw, the textures being shared by
+        # a context's renderers, each with its own texture_anisotropy
+        filtered = [texture for texture in textures.values() if texture.filter[0] == moderngl.LINEAR_MIPMAP_LINEAR]
+        early = (self.depth_prepass and material.textured and spec.vertex == MESH_VERT and not material.cutout
+                 and not self.role.additive)  # fmt: skip
         depth_vao = self.mesh_vertex_array(get_program(ctx, DEPTH_PROGRAM), index) if early else None
-        return program, vao, uniforms, textures, own_textures, shading, depth_vao
+        return MeshDraw(program, vao, uniforms, textures, own_textures, shading, depth_vao, filtered)
 
     # ------------------------------------------------------------------ how this technique shades
     def material_shadings(self, scene: Scene) -> list[MaterialShading]:
@@ -479,14 +497,17 @@ class Forward(Technique):
         self.prepared.shadows.bind()
         if self._ibl is not None:
             self._ibl.bind()
-        draws = [draw for draw in self._draws if draw is not None]
-        early = self._depth_prepass(target, draws, vp_bytes) if self.depth_prepass else set()
+        early = self._depth_prepass(target, vp_bytes)
         eye = view_eye(self.scene.camera)
         per_frame = {**self.frame_uniforms(frame, seed), **SHADOW_SAMPLERS, **self._light_uniforms}
-        for k, (program, vao, uniforms, material_textures, own_textures, shading, _) in enumerate(draws):
+        for k, (program, vao, uniforms, material_textures, own_textures, shading, _, filtered) in enumerate(
+            self._shaded
+        ):
             if early:  # a pre-passed mesh: its depths are there, shade the nearest only
                 target.fbo.depth_mask = k not in early
                 ctx.depth_func = depth.NEARER_OR_EQUAL if k in early else depth.NEARER
+            for texture in filtered:
+                texture.anisotropy = self.params.texture_anisotropy
             samplers = {}
             textures = {**material_textures, **own_textures}
             for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
@@ -529,18 +550,16 @@ class Forward(Technique):
             ctx.depth_func = depth.NEARER
         ctx.disable(ctx.DEPTH_TEST)
 
-    def _depth_prepass(self, target, draws: list[tuple], vp_bytes: bytes) -> set[int]:
-        """Draw the depths of the draws that allow it (colour writes off); their indices in ``draws``."""
-        early = {k for k, draw in enumerate(draws) if draw[-1] is not None}
-        if not early:
-            return early
-        program = get_program(self.ctx, DEPTH_PROGRAM)
-        set_uniforms(program, {"u_view_proj": vp_bytes})
+    def _depth_prepass(self, target, vp_bytes: bytes) -> set[int]:
+        """Draw the depths of the meshes that take a pre-pass (colour writes off); their indices in ``_shaded``."""
+        if not self._early:
+            return self._early
+        set_uniforms(self._depth_program, {"u_view_proj": vp_bytes})
         target.fbo.color_mask = (False, False, False, False)
-        for k in early:
-            draws[k][-1].render()
+        for k in self._early:
+            self._shaded[k].depth_vao.render()
         target.fbo.color_mask = (True, True, True, True)
-        return early
+        return self._early
 
     def _draw_background(self, view_proj: np.ndarray) -> None:
         """The environment map along every camera ray (a full-screen triangle at the far plane)."""

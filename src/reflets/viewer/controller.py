@@ -309,6 +309,7 @@ class ViewerController(Painting):
         origin, dirs = pixel_rays(camera, self.size, offsets=(x - math.floor(x), y - math.floor(y)))
         col = int(np.clip(math.floor(x), 0, self.size[0] - 1))
         row = int(np.clip(math.floor(y), 0, self.size[1] - 1))
+        origin = np.broadcast_to(origin, dirs.shape)[row, col]  # an orthographic camera's rays start per pixel
         hits = self._geometry.intersect(origin[None], dirs[row, col][None])
         self.last_hit = origin + hits.t[0] * dirs[row, col] if hits.kind[0] >= 0 else None
         if hits.kind[0] == MESHES:

@@ -137,7 +137,8 @@ class Painting:
             self._geometry = SceneGeometry(self.scene)
         geometry = self._geometry
         origin, dirs = pixel_rays(self.scene.camera, self.size)
-        hits = geometry.intersect(np.broadcast_to(origin, dirs.shape).reshape(-1, 3), dirs.reshape(-1, 3))
+        origins = np.broadcast_to(origin, dirs.shape).reshape(-1, 3)  # an orthographic camera's: one per pixel
+        hits = geometry.intersect(origins, dirs.reshape(-1, 3))
         on = (hits.kind == MESHES) & (geometry.face_mesh[np.maximum(hits.prim, 0)] == index)
         offset = sum(mesh_data(self.scene, j).n_vertices for j in range(index))  # its vertices in the geometry's
         corners = geometry.faces[hits.prim[on]] - offset  # in the mesh's own vertex order (mesh_data's)
@@ -145,7 +146,7 @@ class Painting:
         ell[:, 1:] *= np.where(np.einsum("nj,ncj->nc", ell[:, 0], ell[:, 1:]) < 0, -1.0, 1.0)[..., None]
         u, v = hits.u[on], hits.v[on]
         along = (1 - u - v)[:, None] * ell[:, 0] + u[:, None] * ell[:, 1] + v[:, None] * ell[:, 2]
-        points = origin + hits.t[on][:, None] * dirs.reshape(-1, 3)[on]
+        points = origins[on] + hits.t[on][:, None] * dirs.reshape(-1, 3)[on]
         scale = 1e-3 * self._bounds(("mesh", index))[1]
         screen = project(self.scene.camera, points + scale * along, self.size) - project(
             self.scene.camera, points, self.size
