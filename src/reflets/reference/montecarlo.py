@@ -37,7 +37,7 @@ from ..errors import ArgumentError
 from ..resources import check, fitting_size
 from ..scene.camera import camera_rays
 from ..scene.environment import load_environment
-from ..scene.lightmask import load_masks
+from ..scene.lightmask import LUMINANCE, load_masks
 from ..scene.model import DirectionalLight, PointLight, Scene
 from .geometry import EMITTERS, MESHES, SceneGeometry
 from .lights import EnvironmentSampler, PolygonSampler
@@ -182,7 +182,7 @@ class MonteCarloReference:
 
     def _refine(self, mean, err, counts, target, max_spp, seed, width, height, pixel) -> None:
         """Adaptive rounds (module docstring): noisy pixels re-rendered alone with 4× the samples."""
-        weights = np.array([0.2126, 0.7152, 0.0722])
+        weights = LUMINANCE
         for round_ in range(1, 64):
             luminance = mean @ weights
             scale = np.maximum(np.abs(luminance), max(float(np.mean(np.abs(luminance))), 1e-12))

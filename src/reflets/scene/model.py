@@ -298,11 +298,15 @@ class SpotCone(Strict):
         scale = 1.0 / max(1e-3, cos_inner - cos_outer)
         return float(scale), float(-cos_outer * scale)
 
+    @property
+    def axis(self) -> np.ndarray:
+        """The unit direction of the cone."""
+        return np.asarray(self.direction, np.float64) / np.linalg.norm(self.direction)
+
     def falloff(self, from_light: np.ndarray) -> np.ndarray:
         """The attenuation (N,) along unit directions (N, 3) from the light."""
-        axis = np.asarray(self.direction, np.float64) / np.linalg.norm(self.direction)
         scale, offset = self.scale_offset()
-        return np.clip(from_light @ axis * scale + offset, 0.0, 1.0) ** 2
+        return np.clip(from_light @ self.axis * scale + offset, 0.0, 1.0) ** 2
 
 
 class PointLight(Strict):

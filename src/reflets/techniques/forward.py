@@ -241,9 +241,9 @@ class Forward(Technique):
         shadows = self.prepared.shadows
         for light in scene.light:  # w of a delta light's second row: its first shadow view + 1 (0: no shadow)
             if isinstance(light, PointLight):
-                scale, offset = light.spot.scale_offset() if light.spot is not None else (0.0, 1.0)
-                axis = np.asarray(light.spot.direction if light.spot is not None else (0.0, 0.0, 0.0), np.float64)
-                axis = axis / max(np.linalg.norm(axis), 1e-300)
+                cone = light.spot  # an isotropic light: scale 0, offset 1 (a factor of 1 everywhere)
+                scale, offset = cone.scale_offset() if cone is not None else (0.0, 1.0)
+                axis = cone.axis if cone is not None else (0.0, 0.0, 0.0)
                 points_l += [(*light.position, scale), (*light.intensity, shadows.view_index(light) + 1.0),
                              (*axis, offset)]  # fmt: skip
             elif isinstance(light, DirectionalLight):
@@ -431,7 +431,8 @@ class Forward(Technique):
         self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int | None = None, first_frame: int = 0
     ) -> tuple[np.ndarray, int]:
         """Draw the frames of ``spp`` samples (frame indices from ``first_frame``: a progressive caller goes on
-        where it stopped) and return their float64 sum at the supersampled size, and how many frames."""
+        where it stopped) and return their sum at the supersampled size (``add_frame``: one float32 frame as it is,
+        float64 from two on), and how many frames."""
         if self.scene is None:
             raise RuntimeError("call prepare(scene) before render()")
         ctx = self.ctx
@@ -569,7 +570,7 @@ class Forward(Technique):
         # near-plane point minus the eye in float32
         to_eye = np.eye(4)
         to_eye[:3, 3] = self.scene.camera.position
-        if self.scene.camera.orthographic:  # every ray looks along the view: a pinhole 1e-6 rad wide shows it
+        if self.scene.camera.orthographic:  # every ray looks along the view: a pinhole 1e-4° wide shows it
             cam = self.scene.camera.model_copy(update={"projection": "perspective", "fov_y": 1e-4})
             width, height = cam.size
             view_proj = projection_matrix(cam, width, height, 1.0) @ look_at(cam.position, cam.look_at, cam.up)

@@ -54,6 +54,7 @@ from ..scene.geometry import bounding_sphere, clip_planes_of_sphere
 from ..scene.lightmask import LUMINANCE, mask_lookup
 from ..scene.model import DirectionalLight, EnvironmentLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
+from ..textures import texture_for
 
 _SHADERS = "reflets/techniques/shaders/"
 DEPTH_PROGRAM = ProgramSpec("shadow_depth", vertex=_SHADERS + "mesh.vert", fragment=_SHADERS + "shadow_depth.frag")
@@ -210,8 +211,8 @@ class ShadowMaps:
             return program, self._own(prepared.vertex_array(program, index)), {}, None
         textured = material.base_color_texture is not None
         program = get_program(self.ctx, CUTOUT_PROGRAM, BRDF_GLTF_BASE_MAP=int(textured))
-        texture = material.textures(self.ctx)["m_base_color_map"] if textured else None
-        uniforms = {**material.uniforms(), "m_base_color_map": CUTOUT_UNIT}
+        texture = texture_for(self.ctx, material.texture_data("base_color_texture")) if textured else None
+        uniforms = {k: v for k, v in {**material.uniforms(), "m_base_color_map": CUTOUT_UNIT}.items() if k in program}
         return program, self._own(prepared.vertex_array(program, index)), uniforms, texture
 
     def _directional_views(self, light, camera) -> list[dict]:
@@ -305,10 +306,13 @@ class ShadowMaps:
             self._fbo.clear(depth=1.0, viewport=viewport)
             ctx.viewport = viewport
             view_proj = self._views[k]["view_proj"].T.astype(np.float32).tobytes()
+            for program in {id(caster[0]): caster[0] for caster in self._casters}.values():  # one to three
+                set_uniforms(program, {"u_view_proj": view_proj})
             for program, vao, uniforms, texture in self._casters:
                 if texture is not None:
                     texture.use(CUTOUT_UNIT)
-                set_uniforms(program, {**uniforms, "u_view_proj": view_proj})
+                if uniforms:  # a cut-out's own coverage (its program may serve several materials)
+                    set_uniforms(program, uniforms)
                 vao.render()
         ctx.polygon_offset = 0.0, 0.0
         ctx.disable(ctx.DEPTH_TEST)

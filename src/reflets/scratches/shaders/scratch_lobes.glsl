@@ -119,7 +119,9 @@ vec3 scratched_radiance(vec3 x, mat3 frame, vec3 wo, vec2 uv, uvec2 pixel) {
         for (int i = 0; i < N_POINT; ++i) {
             vec3 d = point_data[POINT_STRIDE * i].xyz - x;
             float r2 = dot(d, d);
-            float v = point_visibility(i, x, frame[2]) * point_cone(i, -d * inversesqrt(r2));
+            float cone = point_cone(i, -d * inversesqrt(r2));
+            if (cone <= 0.0) continue;  // outside a spot light's cone: no shadow lookup
+            float v = cone * point_visibility(i, x, frame[2]);
             if (v <= 0.0) continue;
             sum += thick_light(wo, transpose(frame) * (d * inversesqrt(r2)), point_data[POINT_STRIDE * i + 1].rgb * (v / r2), norm, rng);
         }
