@@ -3,20 +3,25 @@ edited orientation field (highlight editing) is seen outside reflets.
 
 - meshes: world-space positions, normals, **tangents** (xyz + handedness: the mesh's own, or its material's
   orientation field — what a glTF renderer orients anisotropy by), uv, indices; one node each;
-- materials: glTF's metallic-roughness model, which is GGX: a reflets material maps exactly when it is a GGX
+- materials: a ``gltf`` material (what a glTF / OBJ asset is read as) as it is — every factor, texture (its image
+  bytes as read, unless re-encoded: a channel swizzle or an explicit ``srgb`` against the slot's role), sampler,
+  uv set, KHR_texture_transform, alpha mode and extension (emissive_strength, ior, specular, clearcoat, sheen,
+  unlit): a glTF file read, exported and read again gives the same materials and textures;
+  other models through glTF's metallic-roughness model, which is GGX: a reflets material maps exactly when it is a GGX
   microfacet (roughness = √α; a conductor's base colour is its normal-incidence Fresnel reflectance), and
   approximately otherwise (roughness from the lobe's GGX-equivalent α, as the prefiltered environment uses it;
   a Lambertian part as base colour, a coloured specular through ``KHR_materials_specular``); anisotropic α
   through ``KHR_materials_anisotropy`` (α_t = mix(α_b, 1, strength²) along the tangent, turned by 90° when the
   rougher direction is the bitangent); each approximation is reported;
-- lights: point and directional lights through ``KHR_lights_punctual`` (reflets' radiometric units as they
-  are); area lights as emissive geometry (``KHR_materials_emissive_strength``); the environment is left out
-  (reported);
-- the camera: a perspective camera with the scene's field of view and aspect ratio.
+- lights: point, spot and directional lights through ``KHR_lights_punctual``, in its photometric units (× 683 lm/W:
+  the inverse of what reading does, ``reflets.scene.assets``); area lights as emissive geometry
+  (``KHR_materials_emissive_strength``); the environment is left out (reported);
+- the camera: perspective (field of view, aspect ratio) or orthographic.
 """
 
 from __future__ import annotations
 
+import io
 import math
 from pathlib import Path
 
@@ -28,6 +33,143 @@ ANISOTROPY = "KHR_materials_anisotropy"
 SPECULAR = "KHR_materials_specular"
 LIGHTS = "KHR_lights_punctual"
 EMISSIVE = "KHR_materials_emissive_strength"
+TRANSFORM = "KHR_texture_transform"
+#: glTF sampler wrap codes
+WRAP_CODES = {"repeat": 10497, "clamp": 33071, "mirror": 33648}
+PNG_MAGIC, JPEG_MAGIC = b"\x89PNG\r\n\x1a\n", b"\xff\xd8\xff"
+
+
+class _Textures:
+    """The exported file's images, samplers and textures, each written once: images by content, samplers by
+    settings, textures by (image, sampler)."""
+
+    def __init__(self, add_view):
+        self.add_view = add_view  # bytes → bufferView index
+        self.images: list[dict] = []
+        self.samplers: list[dict] = []
+        self.textures: list[dict] = []
+        self._image_index: dict[bytes, int] = {}
+        self.used: set[str] = set()
+
+    def info(self, ref, role_srgb: bool, where: str, notes: list[str]) -> dict:
+        """A textureInfo dict for ``ref`` read as ``role_srgb`` (the slot's colour encoding)."""
+        import hashlib
+
+        data, mime = self._encoded(ref, role_srgb, where, notes)
+        digest = hashlib.sha1(data).digest()
+        if digest not in self._image_index:
+            self._image_index[digest] = len(self.images)
+            self.images.append({"bufferView": self.add_view(data), "mimeType": mime})
+        sampler = {"wrapS": WRAP_CODES[ref.wrap[0]], "wrapT": WRAP_CODES[ref.wrap[1]]}
+        if ref.filter == "nearest":
+            sampler |= {"magFilter": 9728, "minFilter": 9984}  # NEAREST, NEAREST_MIPMAP_NEAREST
+        if sampler not in self.samplers:
+            self.samplers.append(sampler)
+        texture = {"source": self._image_index[digest], "sampler": self.samplers.index(sampler)}
+        if texture not in self.textures:
+            self.textures.append(texture)
+        info: dict = {"index": self.textures.index(texture)}
+        if ref.uv:
+            info["texCoord"] = ref.uv
+        if ref.transform is not None:
+            t = ref.transform
+            info["extensions"] = {TRANSFORM: {"offset": list(t.offset), "rotation": t.rotation, "scale": list(t.scale)}}
+            self.used.add(TRANSFORM)
+        return info
+
+    @staticmethod
+    def _encoded(ref, role_srgb: bool, where: str, notes: list[str]) -> tuple[bytes, str]:
+        """The image's own bytes when glTF can hold them as they are (PNG / JPEG, no swizzle, the slot's
+        encoding), else its decoded texels as a PNG in the slot's encoding."""
+        from PIL import Image
+
+        from .imageio import linear_to_srgb
+        from .textures import load_texture
+
+        if ref.image is not None:
+            from .gltf_file import read_gltf
+
+            data = read_gltf(ref.texture).image_bytes(ref.image)
+        else:
+            data = Path(ref.texture).read_bytes()
+        mime = "image/png" if data.startswith(PNG_MAGIC) else "image/jpeg" if data.startswith(JPEG_MAGIC) else None
+        srgb = role_srgb if ref.srgb is None else ref.srgb
+        if mime is not None and ref.channels in (None, "rgba") and srgb == role_srgb:
+            return data, mime
+        decoded = load_texture(ref, srgb)
+        codes = decoded.codes
+        if srgb != role_srgb:  # re-encoded for the slot: its linear values in the slot's encoding, 8 bits
+            values = decoded.texels.copy()
+            if role_srgb:
+                values[..., :3] = linear_to_srgb(np.clip(values[..., :3], 0.0, 1.0))
+            codes = np.clip(np.rint(values * 255.0), 0, 255).astype(np.uint8)
+            notes.append(f"{where}: re-encoded {'as sRGB' if role_srgb else 'linear'} (glTF fixes each slot's "
+                         f"encoding; 8-bit rounding)")  # fmt: skip
+        out = io.BytesIO()
+        Image.fromarray(np.ascontiguousarray(codes), "RGBA").save(out, format="PNG")
+        return out.getvalue(), "image/png"
+
+
+def _gltf_material(name: str, m, textures: _Textures) -> tuple[dict, list[str]]:
+    """A ``gltf`` material written back as it is (the inverse of ``reflets.scene.assets``' reading)."""
+    from .brdf.gltf import SLOTS
+
+    notes: list[str] = []
+    role = {field: srgb for field, _, srgb, _ in SLOTS}
+
+    def info(field: str, **extra) -> dict | None:
+        ref = getattr(m, field)
+        return None if ref is None else textures.info(ref, role[field], f"{name}.{field}", notes) | extra
+
+    pbr = {"baseColorFactor": list(m.base_color), "metallicFactor": m.metallic, "roughnessFactor": m.roughness,
+           "baseColorTexture": info("base_color_texture"),
+           "metallicRoughnessTexture": info("metallic_roughness_texture")}  # fmt: skip
+    emissive = np.asarray(m.emissive, float)
+    strength = m.emissive_strength * max(1.0, float(emissive.max()))  # glTF's factor is at most 1 per channel
+    out = {
+        "name": name,
+        "pbrMetallicRoughness": pbr,
+        "normalTexture": info("normal_texture", scale=m.normal_scale),
+        "occlusionTexture": info("occlusion_texture", strength=m.occlusion_strength),
+        "emissiveFactor": (emissive * m.emissive_strength / strength).tolist() if strength > 0 else [0.0, 0.0, 0.0],
+        "emissiveTexture": info("emissive_texture"),
+        "alphaMode": m.alpha_mode.upper(),
+        "alphaCutoff": m.alpha_cutoff if m.alpha_mode == "mask" else None,
+        "doubleSided": m.double_sided,
+    }
+    extensions: dict = {}
+    if strength != 1.0 and strength > 0:
+        extensions[EMISSIVE] = {"emissiveStrength": strength}
+    if m.unlit:
+        extensions["KHR_materials_unlit"] = {}
+    if m.ior != 1.5:
+        extensions["KHR_materials_ior"] = {"ior": m.ior}
+    tinted = tuple(m.specular_color) != (1.0, 1.0, 1.0)
+    if m.specular != 1.0 or tinted or m.specular_texture or m.specular_color_texture:
+        extensions[SPECULAR] = {"specularFactor": m.specular, "specularColorFactor": list(m.specular_color),
+                                "specularTexture": info("specular_texture"),
+                                "specularColorTexture": info("specular_color_texture")}  # fmt: skip
+    if m.clearcoat > 0 or m.clearcoat_texture is not None:
+        extensions["KHR_materials_clearcoat"] = {
+            "clearcoatFactor": m.clearcoat, "clearcoatRoughnessFactor": m.clearcoat_roughness,
+            "clearcoatTexture": info("clearcoat_texture"),
+            "clearcoatRoughnessTexture": info("clearcoat_roughness_texture"),
+            "clearcoatNormalTexture": info("clearcoat_normal_texture", scale=m.clearcoat_normal_scale),
+        }  # fmt: skip
+    if max(m.sheen_color) > 0 or m.sheen_color_texture is not None:
+        extensions["KHR_materials_sheen"] = {
+            "sheenColorFactor": list(m.sheen_color), "sheenRoughnessFactor": m.sheen_roughness,
+            "sheenColorTexture": info("sheen_color_texture"),
+            "sheenRoughnessTexture": info("sheen_roughness_texture"),
+        }  # fmt: skip
+    if extensions:
+        out["extensions"] = {key: _without_none(value) for key, value in extensions.items()}
+    return _without_none(out), notes
+
+
+def _without_none(d: dict) -> dict:
+    return {key: _without_none(value) if isinstance(value, dict) else value for key, value in d.items()
+            if value is not None}  # fmt: skip
 
 
 def _alphas(material) -> tuple[float, float] | None:
@@ -126,6 +268,7 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
     """Write ``scene`` as a .glb; returns the path and the approximations made (one line each)."""
     import pygltflib as g
 
+    from .scene.assets import LUMINOUS_EFFICACY
     from .scene.geometry import mesh_data
 
     path = Path(path)
@@ -135,12 +278,16 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
     blob = bytearray()
     views, accessors = [], []
 
-    def add(array: np.ndarray, target: int | None, kind: str, component: int, bounds: bool = False) -> int:
-        data = np.ascontiguousarray(array)
+    def add_view(data: bytes, target: int | None = None) -> int:
         while len(blob) % 4:
             blob.append(0)
-        views.append(g.BufferView(buffer=0, byteOffset=len(blob), byteLength=data.nbytes, target=target))
-        blob.extend(data.tobytes())
+        views.append(g.BufferView(buffer=0, byteOffset=len(blob), byteLength=len(data), target=target))
+        blob.extend(data)
+        return len(views) - 1
+
+    def add(array: np.ndarray, target: int | None, kind: str, component: int, bounds: bool = False) -> int:
+        data = np.ascontiguousarray(array)
+        add_view(data.tobytes(), target)
         accessor = g.Accessor(bufferView=len(views) - 1, componentType=component, count=len(data), type=kind)
         if bounds:
             accessor.min, accessor.max = data.min(axis=0).tolist(), data.max(axis=0).tolist()
@@ -149,8 +296,13 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
 
     names = list(scene.materials)
     materials = []
+    textures = _Textures(add_view)
     for name in names:
-        material, found = material_to_gltf(name, scene.materials[name])
+        material = scene.materials[name]
+        if material.type == "gltf":
+            material, found = _gltf_material(name, material, textures)
+        else:
+            material, found = material_to_gltf(name, material)
         materials.append(material)
         notes += found
     meshes, nodes, boxes = [], [], []
@@ -172,11 +324,17 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
     lights = []
     for index, light in enumerate(scene.light):
         if light.type in ("point", "directional"):
-            power = light.intensity if light.type == "point" else light.irradiance
+            power = light.intensity if light.type == "point" else light.irradiance  # W/sr, W/m²
             peak = max(float(max(power)), 1e-30)
             spot = light.spot if light.type == "point" else None
-            lights.append({"type": "spot" if spot else light.type, "color": [float(c) / peak for c in power],
-                           "intensity": peak, "name": f"light[{index}]"})  # fmt: skip
+            lights.append(
+                {
+                    "type": "spot" if spot else light.type,
+                    "color": [float(c) / peak for c in power],
+                    "intensity": peak * LUMINOUS_EFFICACY,
+                    "name": f"light[{index}]",
+                }
+            )  # cd, lx; fmt: skip
             if spot is not None:
                 lights[-1]["spot"] = {"innerConeAngle": float(np.radians(spot.inner_deg)),
                                       "outerConeAngle": float(np.radians(spot.outer_deg))}  # fmt: skip
@@ -212,7 +370,8 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
             name="camera", camera=0, translation=eye.tolist(), rotation=_rotation_to(target - eye, np.asarray(cam.up))
         )
     )
-    used = sorted({ext for m in materials for ext in m.get("extensions", {})} | ({LIGHTS} if lights else set()))
+    used = {ext for m in materials for ext in m.get("extensions", {})} | ({LIGHTS} if lights else set())
+    used = sorted(used | textures.used)
     document = g.GLTF2(
         scene=0,
         scenes=[g.Scene(nodes=list(range(len(nodes))))],
@@ -220,6 +379,9 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
         meshes=meshes,
         materials=[g.Material.from_dict(m) for m in materials],
         accessors=accessors,
+        images=[g.Image(**image) for image in textures.images],
+        samplers=[g.Sampler(**sampler) for sampler in textures.samplers],
+        textures=[g.Texture(**texture) for texture in textures.textures],
         bufferViews=views,
         buffers=[g.Buffer(byteLength=len(blob))],
         cameras=[_gltf_camera(g, cam, np.asarray(boxes, np.float64).reshape(-1, 2, 3))],

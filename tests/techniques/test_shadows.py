@@ -271,8 +271,8 @@ def test_spot_cone_falls_off_as_gltf_defines_it_in_both_renderers_and_round_trip
     assert relmse(blocks(gpu), blocks(ref)) < 0.02
     path, _ = export_gltf(reflets.load_dict(data), tmp_path / "spot.glb")
     light = next(light for light in reflets.load_scene(path).light if light.type == "point")
-    # export-gltf writes W/sr as glTF's intensity, as three.js reads it; reading divides by 683 lm/W (docs/assets.md)
-    assert light.intensity == pytest.approx((5 / 683,) * 3)
+    # export-gltf writes candela (W/sr × 683 lm/W), reading divides by 683 (docs/assets.md): the same light back
+    assert light.intensity == pytest.approx((5,) * 3)
     assert light.spot is not None
     assert light.spot.inner_deg == pytest.approx(15.0) and light.spot.outer_deg == pytest.approx(35.0)
     assert np.allclose(np.array(light.spot.direction) / np.linalg.norm(light.spot.direction), axis, atol=1e-6)
