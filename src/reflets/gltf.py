@@ -2,7 +2,7 @@
 edited orientation field (highlight editing) is seen outside reflets.
 
 - meshes: world-space positions, normals, **tangents** (xyz + handedness: the mesh's own, or its material's
-  orientation field — what a glTF renderer orients anisotropy by), uv, indices; one node each;
+  orientation field — what a glTF renderer orients anisotropy by), both uv sets, indices; one node each;
 - materials: a ``gltf`` material (what a glTF / OBJ asset is read as) as it is — every factor, texture (its image
   bytes as read, unless re-encoded: a channel swizzle or an explicit ``srgb`` against the slot's role), sampler,
   uv set, KHR_texture_transform, alpha mode and extension (emissive_strength, ior, specular, clearcoat, sheen,
@@ -317,6 +317,9 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
                 np.stack([data.uvs[:, 0], 1.0 - data.uvs[:, 1]], 1).astype(np.float32), g.ARRAY_BUFFER, g.VEC2, g.FLOAT
             ),
         )
+        if data.uvs1 is not None:
+            attributes.TEXCOORD_1 = add(np.stack([data.uvs1[:, 0], 1.0 - data.uvs1[:, 1]], 1).astype(np.float32),
+                                        g.ARRAY_BUFFER, g.VEC2, g.FLOAT)  # fmt: skip
         indices = add(data.indices.astype(np.uint32).ravel(), g.ELEMENT_ARRAY_BUFFER, g.SCALAR, g.UNSIGNED_INT)
         primitive = g.Primitive(attributes=attributes, indices=indices, material=names.index(mesh.material))
         meshes.append(g.Mesh(name=mesh.name or f"mesh[{index}]", primitives=[primitive]))

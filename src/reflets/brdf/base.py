@@ -142,18 +142,20 @@ class Material(BaseModel):
     fragment_ibl: ClassVar[bool] = False
 
     def at(self, uv: np.ndarray, frames: tuple[np.ndarray, np.ndarray] | None = None):
-        """What evaluates the BRDF at N surface points of mesh uv (N, 2): ``eval`` / ``sample`` / ``pdf`` over (N, 3)
+        """What evaluates the BRDF at N surface points of mesh uv (N, 4: both uv sets, ``MeshData.uv_sets``; or
+        (N, 2): the first alone): ``eval`` / ``sample`` / ``pdf`` over (N, 3)
         directions, one per point, in the shading frame. ``frames``: the points' geometric frames and their shading
         frames (:meth:`shading_frame`'s), for a layer with a normal of its own (glTF's clear coat). Constant
         parameters: the material itself."""
         return self
 
     def shading_frame(self, frame: np.ndarray, uv: np.ndarray) -> np.ndarray:
-        """The shading frames (N, 3, 3; columns t, b, n) at mesh uv (N, 2), once a normal map has turned them."""
+        """The shading frames (N, 3, 3; columns t, b, n) at mesh uv (as :meth:`at`), once a normal map has turned
+        them."""
         return frame
 
     def emission(self, uv: np.ndarray) -> np.ndarray:
-        """Emitted radiance (N, 3) at mesh uv (N, 2)."""
+        """Emitted radiance (N, 3) at mesh uv (as :meth:`at`)."""
         return np.zeros((len(uv), 3))
 
 

@@ -418,18 +418,23 @@ class Gltf(Material):
         return load_texture(ref, srgb)
 
     def _lookup(self, field: str, uv: np.ndarray) -> np.ndarray | None:
-        """(N, 4) texels of a slot at mesh uv (N, 2), or None."""
+        """(N, 4) texels of a slot at mesh uv: (N, 4) both uv sets (``MeshData.uv_sets``), or (N, 2) the first
+        alone; None without a texture."""
         data = self.texture_data(field)
         if data is None:
             return None
         ref = getattr(self, field)
+        if uv.shape[-1] == 2 and ref.uv:
+            raise ValueError(f"{field} reads uv set {ref.uv}: pass both uv sets, (N, 4)")
+        uv = uv[:, 2 * ref.uv : 2 * ref.uv + 2]
         m = ref.uv_matrix()
         image_uv = uv @ m[:2, :2].T + m[:2, 2]
         return data.sample(image_uv)
 
     def at(self, uv: np.ndarray, frames: tuple[np.ndarray, np.ndarray] | None = None) -> GltfPoints:
-        """The material at mesh uv (N, 2): textures × factors (the reference's per-hit parameters); ``frames``
-        (geometric, shading) place the clear coat's normal (without them: the shading normal)."""
+        """The material at mesh uv (N, 4 or 2: ``_lookup``): textures × factors (the reference's per-hit
+        parameters); ``frames`` (geometric, shading) place the clear coat's normal (without them: the shading
+        normal)."""
         n = len(uv)
         points = self.constant_points((n,))
         base = np.array(points.base)
@@ -514,7 +519,9 @@ class Gltf(Material):
     # ------------------------------------------------------------------------------------------ GPU
 
     def flags(self) -> dict[str, object]:
-        return {flag: int(getattr(self, field) is not None) for field, _, _, flag in SLOTS} | {
+        # a slot's flag: 0 without a texture, else 1 + its uv set (gltf.glsl's GLTF_UV picks the set by it)
+        refs = {flag: getattr(self, field) for field, _, _, flag in SLOTS}
+        return {flag: 0 if ref is None else 1 + ref.uv for flag, ref in refs.items()} | {
             "BRDF_GLTF_MASK": int(self.alpha_mode == "mask"),
             "BRDF_GLTF_COAT": int(self.clearcoat > 0 and not self.unlit),  # unlit: no layer reflects either
             "BRDF_GLTF_SHEEN": int(self.sheened and not self.unlit),

@@ -66,7 +66,7 @@ class SceneGeometry:
             positions.append(data.positions.astype(np.float64))
             normals.append(data.normals.astype(np.float64))
             tangents.append(data.tangents.astype(np.float64))
-            uvs.append(data.uvs.astype(np.float64))
+            uvs.append(data.uv_sets.astype(np.float64))
             faces.append(data.indices.astype(np.int64) + offset)
             materials.append(np.full(data.n_triangles, names.index(mesh.material)))
             meshes.append(np.full(data.n_triangles, index))
@@ -77,7 +77,8 @@ class SceneGeometry:
         self.vertices = np.concatenate(positions) if positions else np.zeros((0, 3))
         self.normals = np.concatenate(normals) if normals else np.zeros((0, 3))
         self.tangents = np.concatenate(tangents) if tangents else np.zeros((0, 4))
-        self.uvs = np.concatenate(uvs) if uvs else np.zeros((0, 2))  # Newton starts of parametric mirrors
+        #: both uv sets (V, 4): textures read either, parametric mirrors start Newton's search at the first
+        self.uvs = np.concatenate(uvs) if uvs else np.zeros((0, 4))
         self.faces = np.concatenate(faces) if faces else np.zeros((0, 3), np.int64)
         self.face_material = np.concatenate(materials) if materials else np.zeros(0, np.int64)
         self.face_mesh = np.concatenate(meshes) if meshes else np.zeros(0, np.int64)  # index into scene.mesh
@@ -137,7 +138,7 @@ class SceneGeometry:
         for k, material in self._cutouts.items():
             sel = on_mesh[materials == k]
             if len(sel):
-                uv = self.uv(hits.prim[sel], hits.u[sel], hits.v[sel])
+                uv = self.uv_sets(hits.prim[sel], hits.u[sel], hits.v[sel])
                 out[sel] = material.coverage(uv) < material.alpha_cutoff
         return out
 
@@ -177,10 +178,15 @@ class SceneGeometry:
             blocked[idx] = (hits.kind >= 0) & (hits.t < np.broadcast_to(distances, blocked.shape)[idx])
         return blocked
 
-    def uv(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """The meshes' texture coordinates interpolated at hits (barycentrics ``u``, ``v`` of ``prim``), (N, 2)."""
+    def uv_sets(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """The meshes' texture coordinates interpolated at hits (barycentrics ``u``, ``v`` of ``prim``): (N, 4),
+        both uv sets (``MeshData.uv_sets``: what ``Material.at`` reads)."""
         w = np.stack([1.0 - u - v, u, v], axis=-1)[..., None]
         return np.sum(w * self.uvs[self.faces[prim]], axis=-2)
+
+    def uv(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """The first uv set at hits, (N, 2)."""
+        return self.uv_sets(prim, u, v)[:, :2]
 
     def surface(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray, ray_dir: np.ndarray) -> Surface:
         """Interpolated shading frame at mesh hits, flipped to face the ray origin (two-sided surfaces, like

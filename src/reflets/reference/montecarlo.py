@@ -239,7 +239,7 @@ class MonteCarloReference:
         geo = self.geometry
         surf = geo.surface(hits.prim[idx], hits.u[idx], hits.v[idx], dirs[idx])
         result = np.zeros((len(idx), 3))
-        bound = self._bind(surf, geo.uv(hits.prim[idx], hits.u[idx], hits.v[idx]), result)
+        bound = self._bind(surf, geo.uv_sets(hits.prim[idx], hits.u[idx], hits.v[idx]), result)
         x, frame = surf.position, surf.frame
         to_local = np.swapaxes(frame, -1, -2)
         wo_world = -dirs[idx]

@@ -27,7 +27,7 @@ What becomes what (docs/assets.md has the full table):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
@@ -391,7 +391,7 @@ def _spot(gltf: GltfFile, spot, where: str, forward: tuple[float, float, float])
 def part_mesh(path: str | Path, part: int) -> MeshData:
     """One primitive instance of a glTF file in the file's world coordinates, with a full shading frame: the
     file's normals (flat normals when it has none, as the specification requires), its tangents (else built from
-    the uv layout: ``compute_tangents``), its TEXCOORD_0 (v flipped to reflets' v up)."""
+    the uv layout: ``compute_tangents``), its TEXCOORD_0 and TEXCOORD_1 (v flipped to reflets' v up)."""
     from .meshfile import _unit, shaded_mesh, spherical_uv
 
     if Path(path).suffix.lower() == ".obj":
@@ -408,11 +408,12 @@ def part_mesh(path: str | Path, part: int) -> MeshData:
     if prim is None or len(prim.indices) == 0:
         raise SceneError(f"{where}: no triangles", file=path)
     pos, faces = prim.positions, prim.indices
-    normals, tangents, uv = prim.normals, prim.tangents, prim.uvs[0]
+    normals, tangents, (uv, uv1) = prim.normals, prim.tangents, prim.uvs
     if normals is None:  # flat: every triangle its own three vertices
         corners = faces.ravel()
         pos, faces = pos[corners], np.arange(len(corners)).reshape(-1, 3)
         uv = uv[corners] if uv is not None else None
+        uv1 = uv1[corners] if uv1 is not None else None
         tangents = None
         face = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
         normals = np.repeat(_unit(face)[0], 3, axis=0)
@@ -424,6 +425,8 @@ def part_mesh(path: str | Path, part: int) -> MeshData:
     if tangents is not None and not np.all(np.isfinite(tangents)):
         tangents = None  # built from the uv layout
     local = shaded_mesh(pos, normals, mesh_uv, faces, tangents)
+    if uv1 is not None:
+        local = replace(local, uvs1=np.stack([uv1[:, 0], 1.0 - uv1[:, 1]], axis=1).astype(np.float32))
     world = local.transformed(instance.matrix)
     extent = np.abs(world.positions).max()
     if not np.isfinite(extent) or extent > MAX_MAGNITUDE:
@@ -445,4 +448,5 @@ def merged_mesh(path: Path) -> MeshData:
         tangents=np.concatenate([p.tangents for p in parts]),
         uvs=np.concatenate([p.uvs for p in parts]),
         indices=np.concatenate([p.indices + np.uint32(o) for p, o in zip(parts, offsets, strict=True)]),
+        uvs1=np.concatenate([p.uv_sets[:, 2:] for p in parts]) if any(p.uvs1 is not None for p in parts) else None,
     )

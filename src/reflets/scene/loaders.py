@@ -195,6 +195,7 @@ def _check_files(scene: Scene, source) -> None:
                 load_heights(mesh.file)
             except SceneError as exc:
                 raise SceneError(exc.message, file=exc.file, field=f"mesh[{i}].file") from None
+    _check_uv_sets(scene)
     for i, light in enumerate(scene.light):
         load_mask(scene, i)  # a bad mask fails here, naming light[i].mask
         if isinstance(light, EnvironmentLight) and not scene.resolve(light.file).is_file():
@@ -203,6 +204,31 @@ def _check_files(scene: Scene, source) -> None:
                 file=source,
                 field=f"light[{i}].file",
             )
+
+
+def _check_uv_sets(scene: Scene) -> None:
+    """A texture on the second uv set of a mesh that has one (a procedural shape, an OBJ or PLY file, a glTF
+    primitive without TEXCOORD_1) reads the first: one warning line per mesh."""
+    from ..gltf_file import read_gltf
+    from ..textures import TextureRef
+
+    for i, mesh in enumerate(scene.mesh):
+        material = scene.materials.get(mesh.material) if mesh.material else None
+        second = [key for key in type(material).model_fields if isinstance(getattr(material, key), TextureRef)
+                  and getattr(material, key).uv == 1] if material is not None else []  # fmt: skip
+        if not second:
+            continue
+        has = False
+        if isinstance(mesh, FileMesh) and scene.resolve(mesh.file).suffix.lower() in (".gltf", ".glb"):
+            gltf = read_gltf(scene.resolve(mesh.file))
+            if mesh.part is not None and mesh.part >= len(gltf.instances):
+                continue  # mesh_data's error names the part
+            instances = gltf.instances if mesh.part is None else gltf.instances[mesh.part : mesh.part + 1]
+            has = all(gltf.doc.meshes[k.mesh].primitives[k.primitive].attributes.TEXCOORD_1 is not None
+                      for k in instances)  # fmt: skip
+        if not has:
+            where = f"materials.{mesh.material}.{second[0]}"
+            _warn([f"mesh[{i}] has one uv set: {where} reads uv set 1, the first is read"])
 
 
 def _check_textures(scene: Scene, name: str, material, source) -> None:
@@ -218,8 +244,6 @@ def _check_textures(scene: Scene, name: str, material, source) -> None:
         if not path.is_file():
             what = "is a directory" if path.is_dir() else "not found"
             raise SceneError(f"texture {what}: {path}", file=source, field=f"materials.{name}.{key}")
-        if ref.uv != 0:
-            _warn([f"materials.{name}.{key}: reads uv set {ref.uv}; reflets meshes carry one uv set, uv 0 is used"])
         if ref.image is not None:
             from ..gltf_file import read_gltf
 

@@ -20,6 +20,7 @@ class MeshData:
         Anisotropic BRDFs are oriented by this frame.
     uvs : (N, 2) float32 texture coordinates
     indices : (M, 3) uint32, counter-clockwise seen from the side the normals point to
+    uvs1 : (N, 2) float32, a second uv set (glTF's TEXCOORD_1), or None (textures on set 1 read ``uvs``)
     """
 
     positions: np.ndarray
@@ -27,6 +28,7 @@ class MeshData:
     tangents: np.ndarray
     uvs: np.ndarray
     indices: np.ndarray
+    uvs1: np.ndarray | None = None
 
     @property
     def n_vertices(self) -> int:
@@ -55,6 +57,7 @@ class MeshData:
             tangents=np.concatenate([tan, w], axis=1).astype(np.float32),
             uvs=self.uvs,
             indices=np.ascontiguousarray(indices, dtype=np.uint32),
+            uvs1=self.uvs1,
         )
 
     def subdivided(self, k: int) -> MeshData:
@@ -94,10 +97,16 @@ class MeshData:
             tangents=np.concatenate([tan, hand], axis=1).astype(np.float32),
             uvs=uv.astype(np.float32),
             indices=np.ascontiguousarray(indices, dtype=np.uint32),
+            uvs1=None if self.uvs1 is None else lerp(self.uvs1).astype(np.float32),
         )
 
+    @property
+    def uv_sets(self) -> np.ndarray:
+        """(N, 4): both uv sets side by side (the first twice when there is no second)."""
+        return np.concatenate([self.uvs, self.uvs if self.uvs1 is None else self.uvs1], axis=1)
+
     def interleaved(self) -> np.ndarray:
-        """Vertex buffer layout for the GPU: position 3f, normal 3f, tangent 4f, uv 2f (48 bytes)."""
+        """Vertex buffer layout for the GPU: position 3f, normal 3f, tangent 4f, uv 2f, uv1 2f (56 bytes)."""
         return np.ascontiguousarray(
-            np.concatenate([self.positions, self.normals, self.tangents, self.uvs], axis=1), dtype=np.float32
+            np.concatenate([self.positions, self.normals, self.tangents, self.uv_sets], axis=1), dtype=np.float32
         )

@@ -28,7 +28,7 @@ EMITTER_PROGRAM = ProgramSpec(
     "emitter", vertex=_SHADERS + "emitter.vert", fragment=_SHADERS + "emitter.frag", flags=frozenset({"EMITTER_MASK"})
 )
 #: the vertex layout of mesh.vert (and every program that draws scene meshes)
-MESH_LAYOUT = ("3f 3f 4f 2f", "in_position", "in_normal", "in_tangent", "in_uv")
+MESH_LAYOUT = ("3f 3f 4f 2f 2f", "in_position", "in_normal", "in_tangent", "in_uv", "in_uv1")
 
 
 class PreparedScene:

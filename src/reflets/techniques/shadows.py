@@ -210,7 +210,7 @@ class ShadowMaps:
             program = get_program(self.ctx, DEPTH_PROGRAM)
             return program, self._own(prepared.vertex_array(program, index)), {}, None
         textured = material.base_color_texture is not None
-        program = get_program(self.ctx, CUTOUT_PROGRAM, BRDF_GLTF_BASE_MAP=int(textured))
+        program = get_program(self.ctx, CUTOUT_PROGRAM, BRDF_GLTF_BASE_MAP=material.flags()["BRDF_GLTF_BASE_MAP"])
         texture = texture_for(self.ctx, material.texture_data("base_color_texture")) if textured else None
         uniforms = {k: v for k, v in {**material.uniforms(), "m_base_color_map": CUTOUT_UNIT}.items() if k in program}
         return program, self._own(prepared.vertex_array(program, index)), uniforms, texture

@@ -13,7 +13,7 @@ void main() {
     if (i >= u_count) return;
 #ifdef MATERIAL_SURFACE
     mat3 frame = mat3(1.0);
-    material_surface(vec2(0.5), frame);  // a textured material's parameters (its factors where no texture)
+    material_surface(vec4(0.5), frame);  // a textured material's parameters (its factors where no texture)
 #endif
     f_data[i] = vec4(brdf_eval(wo_data[i].xyz, wi_data[i].xyz), 0.0);
 }

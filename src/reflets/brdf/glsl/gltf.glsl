@@ -1,6 +1,7 @@
 // Provides brdf_eval(wo, wi) for glTF 2.0's metallic-roughness material (twin of reflets/brdf/gltf.py), and the
 // per-fragment hooks a textured material offers every shading pass (forward.frag, arealight.frag, lights.glsl):
-// material_surface(uv, frame) reads the textures into the parameters brdf_eval uses and applies the normal map;
+// material_surface(uvs, frame) reads the textures (uvs: the two uv sets in xy and zw) into the parameters brdf_eval
+// uses and applies the normal map;
 // material_emission(), material_occlusion(), material_coverage(), material_ibl(mu, ...). Layers: the sheen
 // (BRDF_GLTF_SHEEN) over the base, the clear coat (BRDF_GLTF_COAT) over both.
 #define MATERIAL_SURFACE 1
@@ -95,12 +96,15 @@ vec4 gltf_texel(sampler2D map, mat3 to_image, vec2 uv) {
     return texture(map, (to_image * vec3(uv, 1.0)).xy);
 }
 
-void material_surface(vec2 uv, inout mat3 frame) {
+// a slot's texture coordinates: its flag is 1 + its uv set (gltf.py's flags)
+#define GLTF_UV(flag) ((flag) == 2 ? uvs.zw : uvs.xy)
+
+void material_surface(vec4 uvs, inout mat3 frame) {
 #if BRDF_GLTF_COAT
     // the coat's normal: the geometric one (frame is still unmapped here), or its own normal map on it
     vec3 coat_world = frame[2];
 #if BRDF_GLTF_COAT_NORMAL_MAP
-    vec3 coat_local = gltf_texel(m_clearcoat_normal_map, m_clearcoat_normal_map_uv, uv).xyz * 2.0 - 1.0;
+    vec3 coat_local = gltf_texel(m_clearcoat_normal_map, m_clearcoat_normal_map_uv, GLTF_UV(BRDF_GLTF_COAT_NORMAL_MAP)).xyz * 2.0 - 1.0;
     float coat_length = clamp(length(coat_local), 1e-3, 1.0);  // Toksvig, as for the base's normal map
     g_coat_normal_variance = 2.0 * (1.0 - coat_length) / coat_length * m_clearcoat_normal_scale * m_clearcoat_normal_scale;
     coat_local.xy *= m_clearcoat_normal_scale;
@@ -108,45 +112,45 @@ void material_surface(vec2 uv, inout mat3 frame) {
 #endif
     g_coat = m_clearcoat.x;
 #if BRDF_GLTF_COAT_MAP
-    g_coat *= gltf_texel(m_clearcoat_map, m_clearcoat_map_uv, uv).r;
+    g_coat *= gltf_texel(m_clearcoat_map, m_clearcoat_map_uv, GLTF_UV(BRDF_GLTF_COAT_MAP)).r;
 #endif
     float coat_roughness = m_clearcoat.y;
 #if BRDF_GLTF_COAT_ROUGHNESS_MAP
-    coat_roughness *= gltf_texel(m_clearcoat_roughness_map, m_clearcoat_roughness_map_uv, uv).g;
+    coat_roughness *= gltf_texel(m_clearcoat_roughness_map, m_clearcoat_roughness_map_uv, GLTF_UV(BRDF_GLTF_COAT_ROUGHNESS_MAP)).g;
 #endif
     g_coat_alpha = max(coat_roughness * coat_roughness, 1e-3);
 #endif
     vec4 base = m_base_color;
 #if BRDF_GLTF_BASE_MAP
-    base *= gltf_texel(m_base_color_map, m_base_color_map_uv, uv);
+    base *= gltf_texel(m_base_color_map, m_base_color_map_uv, GLTF_UV(BRDF_GLTF_BASE_MAP));
 #endif
     g_base = base.rgb;
     g_coverage = base.a;
     vec2 mr = m_metallic_roughness;
 #if BRDF_GLTF_MR_MAP
-    mr *= gltf_texel(m_metallic_roughness_map, m_metallic_roughness_map_uv, uv).bg;
+    mr *= gltf_texel(m_metallic_roughness_map, m_metallic_roughness_map_uv, GLTF_UV(BRDF_GLTF_MR_MAP)).bg;
 #endif
     g_metallic = mr.x;
     g_alpha = max(mr.y * mr.y, 1e-3);
     g_specular = m_specular.a;
 #if BRDF_GLTF_SPECULAR_MAP
-    g_specular *= gltf_texel(m_specular_map, m_specular_map_uv, uv).a;
+    g_specular *= gltf_texel(m_specular_map, m_specular_map_uv, GLTF_UV(BRDF_GLTF_SPECULAR_MAP)).a;
 #endif
     vec3 tint = m_specular.rgb;
 #if BRDF_GLTF_SPECULAR_COLOR_MAP
-    tint *= gltf_texel(m_specular_color_map, m_specular_color_map_uv, uv).rgb;
+    tint *= gltf_texel(m_specular_color_map, m_specular_color_map_uv, GLTF_UV(BRDF_GLTF_SPECULAR_COLOR_MAP)).rgb;
 #endif
     g_f0 = min(m_dielectric_f0 * tint, vec3(1.0));
     g_occlusion = 1.0;
 #if BRDF_GLTF_OCCLUSION_MAP
-    g_occlusion = 1.0 + m_occlusion_strength * (gltf_texel(m_occlusion_map, m_occlusion_map_uv, uv).r - 1.0);
+    g_occlusion = 1.0 + m_occlusion_strength * (gltf_texel(m_occlusion_map, m_occlusion_map_uv, GLTF_UV(BRDF_GLTF_OCCLUSION_MAP)).r - 1.0);
 #endif
     g_emission = m_emissive;
 #if BRDF_GLTF_EMISSIVE_MAP
-    g_emission *= gltf_texel(m_emissive_map, m_emissive_map_uv, uv).rgb;
+    g_emission *= gltf_texel(m_emissive_map, m_emissive_map_uv, GLTF_UV(BRDF_GLTF_EMISSIVE_MAP)).rgb;
 #endif
 #if BRDF_GLTF_NORMAL_MAP
-    vec3 local = gltf_texel(m_normal_map, m_normal_map_uv, uv).xyz * 2.0 - 1.0;
+    vec3 local = gltf_texel(m_normal_map, m_normal_map_uv, GLTF_UV(BRDF_GLTF_NORMAL_MAP)).xyz * 2.0 - 1.0;
     // Toksvig: the mips hold means of unit normals; a mean shorter than 1 says how much the normals under this
     // fragment's footprint vary (the slope variance per axis is about 1 - |mean|): the lobe widens by it
     float mean_length = clamp(length(local), 1e-3, 1.0);
@@ -162,10 +166,10 @@ void material_surface(vec2 uv, inout mat3 frame) {
     g_sheen = m_sheen.rgb;
     g_sheen_roughness = m_sheen.a;
 #if BRDF_GLTF_SHEEN_MAP
-    g_sheen *= gltf_texel(m_sheen_color_map, m_sheen_color_map_uv, uv).rgb;
+    g_sheen *= gltf_texel(m_sheen_color_map, m_sheen_color_map_uv, GLTF_UV(BRDF_GLTF_SHEEN_MAP)).rgb;
 #endif
 #if BRDF_GLTF_SHEEN_ROUGHNESS_MAP
-    g_sheen_roughness *= gltf_texel(m_sheen_roughness_map, m_sheen_roughness_map_uv, uv).a;
+    g_sheen_roughness *= gltf_texel(m_sheen_roughness_map, m_sheen_roughness_map_uv, GLTF_UV(BRDF_GLTF_SHEEN_ROUGHNESS_MAP)).a;
 #endif
     g_sheen_roughness = max(g_sheen_roughness, 0.07);
 #endif

@@ -6,6 +6,7 @@ in vec3 v_position;
 in vec3 v_normal;
 in vec4 v_tangent;
 in vec2 v_uv;
+in vec2 v_uv1;
 
 uniform vec3 u_eye;
 
@@ -16,7 +17,7 @@ void main() {
     if (!gl_FrontFacing) n = -n;  // surfaces are two-sided: shade the side the camera sees
     mat3 frame = shading_frame(n, v_tangent);
 #ifdef MATERIAL_SURFACE
-    material_surface(v_uv, frame);  // textures into the parameters, the normal map into the frame
+    material_surface(vec4(v_uv, v_uv1), frame);  // textures into the parameters, the normal map into the frame
     material_antialias(n);         // sub-pixel highlights widened by the footprint's normals
     if (!material_covered()) discard;
 #endif
