@@ -35,8 +35,8 @@ ASSETS = Path(__file__).parents[1] / "data" / "gltf"
         # KHR_materials_sheen (tools/make_sheen_test.py): factors, colour and roughness textures, under a clear
         # coat, a felt floor at grazing angles (issue 28: ≤ 5 %); measured 0.01 %
         ("SheenTest", (160, 120), 16, (16, 0.05), 0.05),
-        # alphaMode MASK at three cut-offs: the holes seen through and shadowed through in both renderers
-        # (BLEND is opaque in both); measured 0.12 %
+        # alphaMode MASK at three cut-offs and BLEND: the holes and the blended surfaces seen through and shadowed
+        # through in both renderers
         ("AlphaBlendModeTest", (160, 120), 16, (16, 0.05), 0.02),
     ],
 )
@@ -52,7 +52,7 @@ def test_textured_asset_matches_the_numpy_reference(name, size, spp, reference, 
         bare = {k: m.model_copy(update={"clearcoat": 0.0}) for k, m in scene.materials.items()}
         uncoated = reflets.render(scene.model_copy(update={"materials": bare}), size=size, spp=16)
         assert np.mean((gpu - uncoated) ** 2) / np.mean(gpu**2) > 1e-3  # measured 5e-3: small sharp highlights
-    if name == "AlphaBlendModeTest":  # the cut-outs change the image
+    if name == "AlphaBlendModeTest":  # the cut-outs and the blending change the image
         solid = {k: m.model_copy(update={"alpha_mode": "opaque"}) for k, m in scene.materials.items()}
         uncut = reflets.render(scene.model_copy(update={"materials": solid}), size=size, spp=16)
         assert np.mean((gpu - uncut) ** 2) / np.mean(gpu**2) > 0.02  # measured 0.078

@@ -135,7 +135,13 @@ class Material(BaseModel):
 
     @property
     def cutout(self) -> bool:
-        """Its GLSL twin may discard fragments (a coverage cut-out): a depth pre-pass cannot stand for it."""
+        """Light goes through parts of it (a coverage cut-out's holes; a blended surface, ``blended``): no depth
+        pre-pass stands for it, the shadow maps and the references test its coverage."""
+        return False
+
+    @property
+    def blended(self) -> bool:
+        """Drawn over what lies behind it by its coverage (glTF's alphaMode BLEND): after the opaque surfaces."""
         return False
 
     #: the GLSL twin gives the split sum's albedos per fragment (``material_ibl``): no albedo curve is computed

@@ -284,7 +284,8 @@ class Gltf(Material):
     ior : the dielectric's index of refraction (KHR_materials_ior; default 1.5: F₀ = 0.04; ≥ 1, or 0: F = 1).
     sheen_color, sheen_color_texture : the sheen's colour (× RGB, sRGB; KHR_materials_sheen; default 0: none).
     sheen_roughness, sheen_roughness_texture : its roughness (× A; at least 0.07).
-    alpha_mode : "opaque" (default), "mask" (coverage < alpha_cutoff is a hole) or "blend".
+    alpha_mode : "opaque" (default), "mask" (coverage < alpha_cutoff is a hole) or "blend" (the surface's radiance
+        over what lies behind it, weighted by the coverage a: a L + (1 − a) L_behind; its shadow lets 1 − a through).
     """
 
     type: Literal["gltf"] = "gltf"
@@ -403,7 +404,18 @@ class Gltf(Material):
 
     @property
     def cutout(self) -> bool:
-        return self.alpha_mode == "mask"
+        return self.alpha_mode in ("mask", "blend")
+
+    @property
+    def blended(self) -> bool:
+        return self.alpha_mode == "blend"
+
+    def holes(self, uv: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Where rays go through (N,) at mesh uv, given uniform numbers ``u`` (N,): a cut-out's coverage under
+        ``alpha_cutoff``; a blended surface's with probability 1 − coverage (the over operator in expectation, and
+        its shadow's transmittance)."""
+        coverage = self.coverage(uv)
+        return coverage < (u if self.blended else self.alpha_cutoff)
 
     @property
     def textured(self) -> bool:
@@ -523,6 +535,7 @@ class Gltf(Material):
         refs = {flag: getattr(self, field) for field, _, _, flag in SLOTS}
         return {flag: 0 if ref is None else 1 + ref.uv for flag, ref in refs.items()} | {
             "BRDF_GLTF_MASK": int(self.alpha_mode == "mask"),
+            "BRDF_GLTF_BLEND": int(self.alpha_mode == "blend"),
             "BRDF_GLTF_COAT": int(self.clearcoat > 0 and not self.unlit),  # unlit: no layer reflects either
             "BRDF_GLTF_SHEEN": int(self.sheened and not self.unlit),
             "BRDF_GLTF_UNLIT": int(self.unlit),

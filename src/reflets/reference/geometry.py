@@ -53,6 +53,23 @@ class Surface:
     material: np.ndarray  # index into SceneGeometry.material_names
 
 
+def _hit_uniforms(hits, sel: np.ndarray, salt: np.ndarray | None) -> np.ndarray:
+    """A number in [0, 1) per hit, hashed from where it lies (triangle, barycentrics, distance) and the ray's
+    ``salt`` (FNV-1a over their bits, then a murmur-style finaliser): a blended surface's stochastic coverage —
+    independent between rays, the same for a ray traced twice."""
+    words = [hits.prim[sel].astype(np.uint32)]
+    extra = () if salt is None else (salt,)
+    words += [np.ascontiguousarray(np.asarray(a, np.float32)).view(np.uint32)
+              for a in (hits.u[sel], hits.v[sel], hits.t[sel], *extra)]  # fmt: skip
+    h = np.full(len(sel), 2166136261, np.uint32)
+    for word in words:
+        h = (h ^ word) * np.uint32(16777619)
+    for shift, factor in ((16, 0x7FEB352D), (15, 0x846CA68B)):
+        h = (h ^ (h >> np.uint32(shift))) * np.uint32(factor)
+    h ^= h >> np.uint32(16)
+    return h.astype(np.float64) / 2.0**32
+
+
 class SceneGeometry:
     """All triangles of a scene in one Embree scene (meshes + emitters) and one with emitters only."""
 
@@ -111,12 +128,16 @@ class SceneGeometry:
         mesh_construction.TriangleMesh(self._emitters_only, emit_tris)
         self._has = (len(self.faces) > 0, len(self.emitter_triangles) > 0)
 
-    def intersect(self, origins: np.ndarray, directions: np.ndarray, emitters_only: bool = False) -> Hits:
+    def intersect(self, origins: np.ndarray, directions: np.ndarray, emitters_only: bool = False,
+                  salt: np.ndarray | None = None) -> Hits:  # fmt: skip
+        """The first hits along rays, through cut-out holes; ``salt`` (N,) in [0, 1): a number per ray that makes a
+        blended surface's coverage test differ between rays that are otherwise the same (a pixel's samples through
+        its centre)."""
         hits = self._first_hits(origins, directions, emitters_only)
         if emitters_only or not self._cutouts:
             return hits
         origins = np.broadcast_to(origins, np.shape(directions))  # a pinhole's one origin
-        pending = self._in_hole(hits)
+        pending = self._in_hole(hits, salt)
         for _ in range(MAX_CUTOUT_LAYERS):
             if not pending.any():
                 return hits
@@ -126,11 +147,11 @@ class SceneGeometry:
             for name in ("kind", "prim", "u", "v"):
                 getattr(hits, name)[idx] = getattr(again, name)
             hits.t[idx] = np.where(again.kind >= 0, start + again.t, again.t)
-            pending[idx] = self._in_hole(again)
+            pending[idx] = self._in_hole(again, None if salt is None else salt[idx])
         hits.kind[pending] = MESHES  # deeper than MAX_CUTOUT_LAYERS: blocked there
         return hits
 
-    def _in_hole(self, hits: Hits) -> np.ndarray:
+    def _in_hole(self, hits: Hits, salt: np.ndarray | None) -> np.ndarray:
         """Where a mesh hit lands in a cut-out material's hole."""
         out = np.zeros(len(hits.kind), dtype=bool)
         on_mesh = np.flatnonzero(hits.kind == MESHES)
@@ -139,7 +160,7 @@ class SceneGeometry:
             sel = on_mesh[materials == k]
             if len(sel):
                 uv = self.uv_sets(hits.prim[sel], hits.u[sel], hits.v[sel])
-                out[sel] = material.coverage(uv) < material.alpha_cutoff
+                out[sel] = material.holes(uv, _hit_uniforms(hits, sel, None if salt is None else salt[sel]))
         return out
 
     def _first_hits(self, origins: np.ndarray, directions: np.ndarray, emitters_only: bool = False) -> Hits:
@@ -160,8 +181,10 @@ class SceneGeometry:
             t=out["tfar"].astype(np.float64),
         )
 
-    def occluded(self, origins: np.ndarray, directions: np.ndarray, distances: np.ndarray) -> np.ndarray:
-        """True where something (mesh or emitter) lies between origin and origin + distance · direction."""
+    def occluded(self, origins: np.ndarray, directions: np.ndarray, distances: np.ndarray,
+                 salt: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+        """True where something (mesh or emitter) lies between origin and origin + distance · direction (``salt``:
+        :meth:`intersect`'s)."""
         if len(origins) == 0:
             return np.zeros(0, dtype=bool)
         res = self._all.run(
@@ -174,7 +197,7 @@ class SceneGeometry:
         if self._cutouts and blocked.any():  # perhaps by a hole only: the first opaque hit decides
             idx = np.flatnonzero(blocked)
             origins = np.broadcast_to(origins, np.shape(directions))
-            hits = self.intersect(origins[idx], directions[idx])
+            hits = self.intersect(origins[idx], directions[idx], salt=None if salt is None else salt[idx])
             blocked[idx] = (hits.kind >= 0) & (hits.t < np.broadcast_to(distances, blocked.shape)[idx])
         return blocked
 

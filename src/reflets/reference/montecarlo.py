@@ -206,7 +206,7 @@ class MonteCarloReference:
         """Radiance arriving along rays (origin + t·dirs) from the first surface they hit; ``mirrors``: add one
         specular bounce on reflector meshes (reference/mirrors.py)."""
         out = np.zeros((len(u), 3))
-        hits = self.geometry.intersect(np.broadcast_to(origin, dirs.shape), dirs)
+        hits = self.geometry.intersect(np.broadcast_to(origin, dirs.shape), dirs, salt=u[:, -1])
         miss = hits.kind < 0
         out[miss] = self._escaped(dirs[miss])
         on_emitter = np.nonzero(hits.kind == EMITTERS)[0]
@@ -267,7 +267,7 @@ class MonteCarloReference:
                 dist = np.full(len(x), 2.0 * geo.radius + np.linalg.norm(x - geo.centre, axis=-1))
                 radiance = np.broadcast_to(np.asarray(light.irradiance, dtype=np.float64), x.shape)
             fcos, _ = brdf(wi)
-            visible = self._unoccluded(origin, wi, dist, light)
+            visible = self._unoccluded(origin, wi, dist, light, salt=u[:, -1])
             result += np.where(visible[:, None], fcos * radiance, 0.0)
 
         # One BRDF sample shared by the area lights and the environment.
@@ -331,10 +331,12 @@ class MonteCarloReference:
                 result[escaped] += add
         return result
 
-    def _unoccluded(self, origin: np.ndarray, wi: np.ndarray, dist: np.ndarray, light=None) -> np.ndarray:
+    def _unoccluded(self, origin: np.ndarray, wi: np.ndarray, dist: np.ndarray, light=None, salt=None) -> np.ndarray:
+        """Not blocked; ``salt``: a number per ray (a sample's last stream dimension: the pixel jitter, unused
+        through pixel centres) where nothing else tells a pixel's samples apart — a delta light's shadow rays."""
         if not self.visibility or not getattr(light, "shadows", True):
             return np.ones(len(origin), dtype=bool)
-        return ~self.geometry.occluded(origin, wi, dist)
+        return ~self.geometry.occluded(origin, wi, dist, salt=salt)
 
     def _bind(self, surf, uv: np.ndarray, emitted: np.ndarray) -> dict[int, tuple[np.ndarray, object]]:
         """Material index → (its hits, what evaluates the BRDF there: ``Material.at`` each hit's uv), with the

@@ -97,7 +97,8 @@ def pass_plan(scene: Scene, area_method: str) -> list[tuple[str, Scene, frozense
     light view per pass), and the lights it leaves go to the area-light method on the material's BRDF, added
     where that group's depth is equal. The BRDF pass (meshes that leave every light to it, the emitters, the
     background) always runs; passes are ordered by ``Technique.auto_order`` (a pass that reflects the others,
-    ``fermat``, last)."""
+    ``fermat``, last). Blended surfaces (glTF BLEND) are drawn over everything: by the BRDF pass after its
+    background, or — when a pass follows it — by a pass of their own after all the others."""
     groups: dict[tuple, set[int]] = {}
     for i, mesh in enumerate(scene.mesh):
         key = tuple(sorted(scene.materials[mesh.material].techniques(mesh).items()))
@@ -122,7 +123,12 @@ def pass_plan(scene: Scene, area_method: str) -> list[tuple[str, Scene, frozense
         if rest or not drawn:
             order = min(get_technique(m).auto_order for m in mapping.values()) + 0.5
             entries.append((order, area_method, _with_lights(scene, rest), meshes, drawn))
-    entries.append((2, area_method, scene, frozenset(groups.get((), ())), False))
+    brdf_meshes = frozenset(groups.get((), ()))
+    blended = frozenset(i for i in brdf_meshes if scene.materials[scene.mesh[i].material].blended)
+    if blended and any(entry[0] > 2 for entry in entries):  # a later pass (Fermat's) must be behind them
+        entries.append((4, area_method, scene, blended, False))
+        brdf_meshes -= blended
+    entries.append((2, area_method, scene, brdf_meshes, False))
     entries.sort(key=lambda entry: entry[0])  # stable: a group's passes keep their order
     return [(method, pass_scene, meshes, additive) for _, method, pass_scene, meshes, additive in entries]
 

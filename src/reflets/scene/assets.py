@@ -215,8 +215,6 @@ def _material(gltf: GltfFile, index: int, warnings: list[str], left_out: dict[st
     if m.alphaCutoff is not None:
         out["alpha_cutoff"] = float(np.clip(m.alphaCutoff, 0.0, 1.0))
     name = m.name or where
-    if mode == "blend":
-        left_out.setdefault("alphaMode BLEND rendered opaque (no blending yet)", []).append(name)
     for extension in sorted(set(extensions) - SUPPORTED_MATERIAL_EXTENSIONS):
         left_out.setdefault(f"{extension} not supported, the base metallic-roughness material is rendered",
                             []).append(name)  # fmt: skip

@@ -226,7 +226,6 @@ def _material(path: Path, name: str, statements: dict, warnings: list[str]) -> d
     out["base_color"] = tuple(float(np.clip(c, 0.0, 1.0)) for c in color) + (coverage,)
     if coverage < 1.0:
         out["alpha_mode"] = "blend"
-        warnings.append(f"{where}: d {coverage:g}: alphaMode BLEND rendered opaque (no blending yet)")
 
     base_map, alpha_map = take("map_kd"), take("map_d")
     if base_map is not None:

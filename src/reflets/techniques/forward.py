@@ -204,6 +204,7 @@ class MeshDraw(NamedTuple):
     shading: MaterialShading | None
     depth_vao: object
     filtered: list
+    centre: np.ndarray | None = None  # a blended mesh's bounding-box centre (the back-to-front order); else None
 
 
 @register_technique
@@ -299,6 +300,7 @@ class Forward(Technique):
             self._draws.append(self._mesh_draw(index, scene.materials[mesh.material]))
         self._shaded = [draw for draw in self._draws if draw is not None]
         self._early = {k for k, draw in enumerate(self._shaded) if draw.depth_vao is not None}
+        self._blended = [k for k, draw in enumerate(self._shaded) if draw.centre is not None]
         self._depth_program = get_program(ctx, DEPTH_PROGRAM) if self._early else None
 
         self._background = get_program(ctx, BACKGROUND_PROGRAM)
@@ -331,7 +333,8 @@ class Forward(Technique):
         early = (self.depth_prepass and material.textured and spec.vertex == MESH_VERT and not material.cutout
                  and not self.role.additive)  # fmt: skip
         depth_vao = self.mesh_vertex_array(get_program(ctx, DEPTH_PROGRAM), index) if early else None
-        return MeshDraw(program, vao, uniforms, textures, own_textures, shading, depth_vao, filtered)
+        centre = self.prepared.boxes[index].mean(axis=0) if material.blended else None
+        return MeshDraw(program, vao, uniforms, textures, own_textures, shading, depth_vao, filtered, centre)
 
     # ------------------------------------------------------------------ how this technique shades
     def material_shadings(self, scene: Scene) -> list[MaterialShading]:
@@ -500,26 +503,15 @@ class Forward(Technique):
             self._ibl.bind()
         early = self._depth_prepass(target, vp_bytes)
         eye = view_eye(self.scene.camera)
-        per_frame = {**self.frame_uniforms(frame, seed), **SHADOW_SAMPLERS, **self._light_uniforms}
-        for k, (program, vao, uniforms, material_textures, own_textures, shading, _, filtered) in enumerate(
-            self._shaded
-        ):
+        per_frame = {"u_view_proj": vp_bytes, "u_eye": eye, **self.frame_uniforms(frame, seed), **SHADOW_SAMPLERS,
+                     **self._light_uniforms}  # fmt: skip
+        for k, draw in enumerate(self._shaded):
+            if draw.centre is not None:
+                continue  # blended: over everything else, last
             if early:  # a pre-passed mesh: its depths are there, shade the nearest only
                 target.fbo.depth_mask = k not in early
                 ctx.depth_func = depth.NEARER_OR_EQUAL if k in early else depth.NEARER
-            for texture in filtered:
-                texture.anisotropy = self.params.texture_anisotropy
-            samplers = {}
-            textures = {**material_textures, **own_textures}
-            for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
-                texture.use(unit)
-                samplers[name] = unit
-            shading_frame = shading.frame_uniforms(frame, seed) if shading is not None else {}
-            set_uniforms(
-                program,
-                {"u_view_proj": vp_bytes, "u_eye": eye, **uniforms, **samplers, **per_frame, **shading_frame},
-            )
-            vao.render()
+            self._draw_mesh(draw, per_frame, frame, seed)
         if early:
             target.fbo.depth_mask = True
             ctx.depth_func = depth.NEARER
@@ -527,9 +519,44 @@ class Forward(Technique):
             ctx.disable(ctx.BLEND)
             target.fbo.depth_mask = True
             ctx.depth_func = depth.NEARER
-        if not role.extras:
-            ctx.disable(ctx.DEPTH_TEST)
-            return
+        if role.extras:
+            self._draw_extras(vp_bytes, view_proj, radiance and color is None)
+        if self._blended:
+            self._draw_blended(target, eye, per_frame, frame, seed)
+        ctx.disable(ctx.DEPTH_TEST)
+
+    def _draw_mesh(self, draw: MeshDraw, per_frame: dict, frame: int, seed: int) -> None:
+        for texture in draw.filtered:
+            texture.anisotropy = self.params.texture_anisotropy
+        samplers = {}
+        textures = {**draw.material_textures, **draw.own_textures}
+        for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
+            texture.use(unit)
+            samplers[name] = unit
+        shading_frame = draw.shading.frame_uniforms(frame, seed) if draw.shading is not None else {}
+        set_uniforms(draw.program, {**draw.uniforms, **samplers, **per_frame, **shading_frame})
+        draw.vao.render()
+
+    def _draw_blended(self, target, eye, per_frame: dict, frame: int, seed: int) -> None:
+        """glTF BLEND surfaces over everything drawn (the background included), farthest first by their bounding
+        boxes' centres (a mesh's own triangles unsorted, as three.js and Filament draw them); their depths are
+        written, as three.js does, so that a later pass (Fermat's reflectors) stays behind them."""
+        ctx = self.ctx
+        ctx.enable(ctx.BLEND)
+        if self.role.additive:  # more lights on surfaces already blended: add their weighted radiance
+            ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE, moderngl.ZERO, moderngl.ONE
+            ctx.depth_func, target.fbo.depth_mask = depth.NEARER_OR_EQUAL, False
+        else:  # a L + (1 - a) L_behind; the target's alpha kept
+            ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE
+        distance = {k: float(np.linalg.norm(self._shaded[k].centre - eye)) for k in self._blended}
+        for k in sorted(self._blended, key=distance.get, reverse=True):
+            self._draw_mesh(self._shaded[k], per_frame, frame, seed)
+        ctx.disable(ctx.BLEND)
+        ctx.depth_func, target.fbo.depth_mask = depth.NEARER, True
+
+    def _draw_extras(self, vp_bytes: bytes, view_proj: np.ndarray, background: bool) -> None:
+        """The area lights' emitting faces and the environment behind everything."""
+        ctx = self.ctx
         for emitter_program, vao, light, mask in self.prepared.emitters if self.params.output == "radiance" else []:
             if mask is not None:
                 mask.use(1)
@@ -543,13 +570,12 @@ class Forward(Technique):
                 },
             )
             vao.render()
-        if radiance and color is None:
+        if background:
             # The environment last, only where the depth buffer is still clear (llvmpipe then skips the
             # covered pixels: a full-screen background pass first cost 4× the clear at 800×600).
             ctx.depth_func = depth.NEARER_OR_EQUAL
             self._draw_background(view_proj)
             ctx.depth_func = depth.NEARER
-        ctx.disable(ctx.DEPTH_TEST)
 
     def _depth_prepass(self, target, vp_bytes: bytes) -> set[int]:
         """Draw the depths of the meshes that take a pre-pass (colour writes off); their indices in ``_shaded``."""

@@ -60,7 +60,7 @@ _SHADERS = "reflets/techniques/shaders/"
 DEPTH_PROGRAM = ProgramSpec("shadow_depth", vertex=_SHADERS + "mesh.vert", fragment=_SHADERS + "shadow_depth.frag")
 #: the depth pass of a cut-out material (glTF alphaMode MASK): its holes cast no shadow
 CUTOUT_PROGRAM = ProgramSpec("shadow_cutout", vertex=_SHADERS + "mesh.vert", fragment=_SHADERS + "shadow_cutout.frag",
-                             flags=frozenset({"BRDF_GLTF_BASE_MAP"}))  # fmt: skip
+                             flags=frozenset({"BRDF_GLTF_BASE_MAP", "BRDF_GLTF_BLEND"}))  # fmt: skip
 #: the texture unit of a cut-out's base colour while the maps are drawn (the frame's passes bind their own later)
 CUTOUT_UNIT = 0
 #: texture units of the atlas (depth comparisons; raw depths for PCSS) and storage binding of the views in every
@@ -210,7 +210,9 @@ class ShadowMaps:
             program = get_program(self.ctx, DEPTH_PROGRAM)
             return program, self._own(prepared.vertex_array(program, index)), {}, None
         textured = material.base_color_texture is not None
-        program = get_program(self.ctx, CUTOUT_PROGRAM, BRDF_GLTF_BASE_MAP=material.flags()["BRDF_GLTF_BASE_MAP"])
+        flags = material.flags()
+        program = get_program(self.ctx, CUTOUT_PROGRAM, BRDF_GLTF_BASE_MAP=flags["BRDF_GLTF_BASE_MAP"],
+                              BRDF_GLTF_BLEND=flags["BRDF_GLTF_BLEND"])  # fmt: skip
         texture = texture_for(self.ctx, material.texture_data("base_color_texture")) if textured else None
         uniforms = {k: v for k, v in {**material.uniforms(), "m_base_color_map": CUTOUT_UNIT}.items() if k in program}
         return program, self._own(prepared.vertex_array(program, index)), uniforms, texture

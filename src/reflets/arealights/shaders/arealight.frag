@@ -40,6 +40,8 @@ void main() {
 #endif
 #if OUTPUT == 4
     f_color = vec4(vec3(float(g_samples)), 1.0);
+#elif defined(MATERIAL_SURFACE)
+    f_color = vec4(sum, material_alpha());  // a blended surface: the weight of its radiance over what lies behind it
 #else
     f_color = vec4(sum, 1.0);
 #endif

@@ -258,6 +258,15 @@ bool material_covered() {
 #endif
 }
 
+// the weight this fragment is blended with over what lies behind it (alphaMode BLEND: its coverage), else 1
+float material_alpha() {
+#if BRDF_GLTF_BLEND
+    return clamp(g_coverage, 0.0, 1.0);
+#else
+    return 1.0;
+#endif
+}
+
 // The environment's split sum for this BRDF: its specular directional albedo F0 A + B (Schlick: the dielectric's
 // w (F0 A + B), the metal's c A + B, mixed by metallic) and the dielectric's diffuse albedo
 // (1 - m) c (1 - w (F0 + (1 - F0) P)) (F0 its largest channel), P = the mean of (1 - v.h)^5 over the cosine-weighted

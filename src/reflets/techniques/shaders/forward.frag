@@ -30,9 +30,11 @@ void main() {
 #else
     vec3 wo = transpose(frame) * normalize(u_eye - v_position);
     vec3 radiance = direct_lighting(v_position, frame, wo);
+    float alpha = 1.0;
 #ifdef MATERIAL_SURFACE
     radiance += material_emission();
+    alpha = material_alpha();  // a blended surface: the weight of its radiance over what lies behind it
 #endif
-    f_color = vec4(radiance, 1.0);
+    f_color = vec4(radiance, alpha);
 #endif
 }
