@@ -62,10 +62,12 @@ def scene_warnings(scene: Scene, method: str) -> list[str]:
         else:  # drawn by its own technique: what that cannot light
             lights = {light.type for light in scene.light}
             messages += [f"materials.{name}: {text}" for text in material.lighting_warnings(lights)]
-        if method in ("ltc", "analytic", "biased") and material.textured and _has_area_light(scene):
+        if method in ("ltc", "analytic", "biased") and not material.tabulated and _has_area_light(scene):
+            kind, what = ("textured", "textures are") if material.textured else ("anisotropic", "anisotropy is")
             messages.append(
-                f"materials.{name}: method '{method}' lights this textured material by its constant factors under "
-                "quad / polygon lights (its textures are ignored there; auto or forward use them)"
+                f"materials.{name}: method '{method}' lights this {kind} material by its constant factors and an "
+                f"isotropic lobe under quad / polygon lights (its {what} ignored there; auto or forward use "
+                f"{'them' if material.textured else 'it'})"
             )
         if method == "analytic" and _has_glossy_part(material) and _has_area_light(scene):
             messages.append(

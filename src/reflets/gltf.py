@@ -6,7 +6,7 @@ edited orientation field (highlight editing) is seen outside reflets.
 - materials: a ``gltf`` material (what a glTF / OBJ asset is read as) as it is — every factor, texture (its image
   bytes as read, unless re-encoded: a channel swizzle or an explicit ``srgb`` against the slot's role), sampler,
   uv set, KHR_texture_transform, alpha mode and extension (emissive_strength, ior, specular, clearcoat, sheen,
-  unlit): a glTF file read, exported and read again gives the same materials and textures;
+  anisotropy, unlit): a glTF file read, exported and read again gives the same materials and textures;
   other models through glTF's metallic-roughness model, which is GGX: a reflets material maps exactly when it is a GGX
   microfacet (roughness = √α; a conductor's base colour is its normal-incidence Fresnel reflectance), and
   approximately otherwise (roughness from the lobe's GGX-equivalent α, as the prefiltered environment uses it;
@@ -162,6 +162,10 @@ def _gltf_material(name: str, m, textures: _Textures) -> tuple[dict, list[str]]:
             "sheenColorTexture": info("sheen_color_texture"),
             "sheenRoughnessTexture": info("sheen_roughness_texture"),
         }  # fmt: skip
+    if m.anisotropic or m.anisotropy_texture is not None:
+        extensions[ANISOTROPY] = {"anisotropyStrength": m.anisotropy_strength,
+                                  "anisotropyRotation": m.anisotropy_rotation,
+                                  "anisotropyTexture": info("anisotropy_texture")}  # fmt: skip
     if extensions:
         out["extensions"] = {key: _without_none(value) for key, value in extensions.items()}
     return _without_none(out), notes

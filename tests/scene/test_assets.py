@@ -72,11 +72,20 @@ def test_both_cameras_perspective_and_orthographic():
         reflets.load_scene(ASSETS / "Cameras" / "Cameras.gltf", camera="5")
 
 
-def test_emissive_strength_and_unsupported_extensions():
+def test_emissive_strength_and_unsupported_extensions(tmp_path):
+    import pygltflib
+
     scene, _ = load(ASSETS / "EmissiveStrengthTest" / "EmissiveStrengthTest.glb")
     assert max(m.emissive_strength for m in scene.materials.values()) == pytest.approx(16.0)
-    _, said = load(ASSETS / "AnisotropyStrengthTest" / "AnisotropyStrengthTest.glb")
-    assert any("KHR_materials_anisotropy not supported" in line for line in said)
+    document = pygltflib.GLTF2.load(str(ASSETS / "AnisotropyStrengthTest" / "AnisotropyStrengthTest.glb"))
+    for material in document.materials:
+        material.extensions["KHR_materials_iridescence"] = {"iridescenceFactor": 1.0}
+    document.save_binary(str(tmp_path / "iridescent.glb"))
+    _, said = load(tmp_path / "iridescent.glb")
+    assert said == ["iridescent.glb: KHR_materials_iridescence not supported, the base metallic-roughness material is "
+                    "rendered (materials 'materials[0]', 'materials[1]', 'materials[2]' and 47 more)"]  # fmt: skip
+    scene, said = load(ASSETS / "AnisotropyStrengthTest" / "AnisotropyStrengthTest.glb")
+    assert said == [] and max(m.anisotropy_strength for m in scene.materials.values()) == pytest.approx(1.0)
 
 
 def test_sheen_read_with_its_textures_and_no_warning():

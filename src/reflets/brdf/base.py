@@ -140,6 +140,12 @@ class Material(BaseModel):
         return False
 
     @property
+    def tabulated(self) -> bool:
+        """The area-light methods' per-material integrals (LTC, analytic, biased) stand for it: constant
+        parameters, a lobe their tables fit. A textured or anisotropic glTF material is lit by ``forward``."""
+        return True
+
+    @property
     def blended(self) -> bool:
         """Drawn over what lies behind it by its coverage (glTF's alphaMode BLEND): after the opaque surfaces."""
         return False

@@ -42,6 +42,14 @@ KHR_materials_specular tints and weighs the dielectric's Fresnel (Khronos' ``fre
 (× A of ``specular_texture``) and F₀ = min(((η − 1) / (η + 1))² × ``specular_color`` (× RGB of its texture, sRGB),
 1) per channel, F = F₀ + (1 − F₀)(1 − |v·h|)⁵ and the dielectric is (1 − w max(F)) c/π + w F D V.
 
+KHR_materials_anisotropy stretches the base's GGX lobe along a direction of the tangent plane, as the extension
+defines it: with s = ``anisotropy_strength`` (× B of ``anisotropy_texture``) and the direction (1, 0) — or the
+texture's RG × 2 − 1 — turned by ``anisotropy_rotation`` (radians, from the tangent towards the bitangent),
+α_t = mix(α, 1, s²) along it and α_b = α across it, in the anisotropic D and the height-correlated Smith V (the
+extension's V = 0.5 / (n·l |(α_t t·v, α_b b·v, n·v)| + n·v |(α_t t·l, α_b b·l, n·l)|) is this G₂ / (4 n·l n·v)).
+The direction lies in the (normal-mapped) shading frame in both renderers; the sample viewer builds its bitangent
+from the geometric normal instead — the same where no normal map tilts the frame.
+
 KHR_materials_unlit (``unlit``): no light is reflected; the surface shows its base colour (× texture) as the radiance
 leaving it, whatever the lights — an emitter with a zero BRDF in both renderers.
 
@@ -51,6 +59,7 @@ Both renderers evaluate the textures first into per-point parameters and then th
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, ClassVar, Literal
@@ -81,6 +90,7 @@ SLOTS = (
     ("sheen_roughness_texture", "m_sheen_roughness_map", False, "BRDF_GLTF_SHEEN_ROUGHNESS_MAP"),
     ("specular_texture", "m_specular_map", False, "BRDF_GLTF_SPECULAR_MAP"),
     ("specular_color_texture", "m_specular_color_map", True, "BRDF_GLTF_SPECULAR_COLOR_MAP"),
+    ("anisotropy_texture", "m_anisotropy_map", False, "BRDF_GLTF_ANISOTROPY_MAP"),
 )
 #: the smallest sheen roughness rendered (Khronos' sample viewer and three.js clamp it there: below, the Charlie
 #: lobe is a needle at grazing half vectors)
@@ -106,6 +116,7 @@ class GltfPoints:
     specular: np.ndarray | float = 1.0  # its weight (KHR_materials_specular), scalar or (N,)
     sheen: np.ndarray | None = None  # (N, 3) sheen colour; None: no sheen
     sheen_roughness: np.ndarray | None = None  # (N,), at least MIN_SHEEN_ROUGHNESS
+    anisotropy: np.ndarray | None = None  # (N, 3): the direction (cos, sin) in the shading frame and s²; None: none
     unlit: bool = False  # KHR_materials_unlit: reflects nothing (its colour is emitted)
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
@@ -147,15 +158,28 @@ class GltfPoints:
             lobe = d / (1.0 + lam[0] + lam[1]) / (4.0 * nv * nl) * nl / wi[..., 2]
         return fresnel, np.where(up, np.nan_to_num(lobe), 0.0)
 
+    def _lobe(self, shape) -> tuple:
+        """The base's GGX lobe: (into its frame, back, α_t, α_b) — KHR_materials_anisotropy's direction as the
+        lobe's x axis, α_t = mix(α, 1, s²) along it; without anisotropy the shading frame and α, α."""
+        a = np.broadcast_to(self.alpha, shape)
+        if self.anisotropy is None:
+            same = lambda w: w  # noqa: E731
+            return same, same, a, a
+        aniso = np.broadcast_to(self.anisotropy, (*shape, 3))
+        c, s = aniso[..., 0], aniso[..., 1]
+        into = lambda w: np.stack([c * w[..., 0] + s * w[..., 1], c * w[..., 1] - s * w[..., 0], w[..., 2]], -1)  # noqa: E731
+        back = lambda w: np.stack([c * w[..., 0] - s * w[..., 1], s * w[..., 0] + c * w[..., 1], w[..., 2]], -1)  # noqa: E731
+        return into, back, a + aniso[..., 2] * (1.0 - a), a
+
     def _base_eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         wo, wi = np.asarray(wo, np.float64), np.asarray(wi, np.float64)
         up = (wo[..., 2] > 0) & (wi[..., 2] > 0)
         h = _normalize(wo + wi)
-        a = self.alpha
+        into, _, at, ab = self._lobe(up.shape)
         cos_h = np.clip(np.sum(wo * h, axis=-1), 0.0, 1.0)
         schlick = (1.0 - cos_h) ** 5
-        d = Distribution("ggx", a, a).d(h)
-        g2 = 1.0 / (1.0 + smith_lambda_ggx(wo, a, a) + smith_lambda_ggx(wi, a, a))
+        d = Distribution("ggx", at, ab).d(into(h))
+        g2 = 1.0 / (1.0 + smith_lambda_ggx(into(wo), at, ab) + smith_lambda_ggx(into(wi), at, ab))
         with np.errstate(divide="ignore", invalid="ignore"):
             dv = np.where(up, d * g2 / (4.0 * wo[..., 2] * wi[..., 2]), 0.0)
         f0 = np.broadcast_to(self.f0, (*schlick.shape, 3)) if np.ndim(self.f0) else self.f0
@@ -243,8 +267,8 @@ class GltfPoints:
         lobe = u1 < p
         u1s = np.where(lobe, u1 / np.maximum(p, 1e-300), (u1 - p) / np.maximum(1.0 - p, 1e-300))
         u1s = np.clip(u1s, 0.0, np.nextafter(1.0, 0.0))
-        a = np.broadcast_to(self.alpha, u1.shape)
-        h = Distribution("ggx", a, a).sample_visible(wo, u1s, u2)
+        into, back, at, ab = self._lobe(u1.shape)
+        h = back(Distribution("ggx", at, ab).sample_visible(into(wo), u1s, u2))
         wi = np.where(lobe[..., None], reflect(wo, np.nan_to_num(h)), sample_cosine(u1s, u2))
         failed = lobe & np.isnan(h[..., 0])
         wi = np.where(failed[..., None], [0.0, 0.0, -1.0], wi)
@@ -254,10 +278,11 @@ class GltfPoints:
         wo, wi = np.asarray(wo, np.float64), np.asarray(wi, np.float64)
         p = self._specular_probability()
         h = _normalize(wo + wi)
-        a = self.alpha
+        into, _, at, ab = self._lobe(h.shape[:-1])
         dot = np.sum(wo * h, axis=-1)
         with np.errstate(divide="ignore", invalid="ignore"):
-            lobe = np.where(dot > 0, Distribution("ggx", a, a).pdf_visible(wo, h) / (4.0 * np.abs(dot)), 0.0)
+            lobe = np.where(dot > 0, Distribution("ggx", at, ab).pdf_visible(into(wo), into(h)) / (4.0 * np.abs(dot)),
+                            0.0)  # fmt: skip
         cosine = np.maximum(wi[..., 2], 0.0) / np.pi
         return (1.0 - p) * cosine + p * np.nan_to_num(lobe)
 
@@ -284,6 +309,8 @@ class Gltf(Material):
     ior : the dielectric's index of refraction (KHR_materials_ior; default 1.5: F₀ = 0.04; ≥ 1, or 0: F = 1).
     sheen_color, sheen_color_texture : the sheen's colour (× RGB, sRGB; KHR_materials_sheen; default 0: none).
     sheen_roughness, sheen_roughness_texture : its roughness (× A; at least 0.07).
+    anisotropy_strength, anisotropy_rotation, anisotropy_texture : KHR_materials_anisotropy (module docstring): the
+        strength (× B), the direction's turn in radians, the direction in RG (default 0, 0, none: isotropic).
     alpha_mode : "opaque" (default), "mask" (coverage < alpha_cutoff is a hole) or "blend" (the surface's radiance
         over what lies behind it, weighted by the coverage a: a L + (1 − a) L_behind; its shadow lets 1 − a through).
     """
@@ -320,6 +347,9 @@ class Gltf(Material):
     sheen_color_texture: TextureRef | None = None
     sheen_roughness: Unit = 0.0
     sheen_roughness_texture: TextureRef | None = None
+    anisotropy_strength: Unit = 0.0
+    anisotropy_rotation: Annotated[float, Field(ge=-1e3, le=1e3, allow_inf_nan=False)] = 0.0
+    anisotropy_texture: TextureRef | None = None
     alpha_mode: Literal["opaque", "mask", "blend"] = "opaque"
     alpha_cutoff: Unit = 0.5
     double_sided: bool = Field(False, description="glTF's flag (reflets shades both sides of every surface)")
@@ -363,7 +393,28 @@ class Gltf(Material):
         if self.sheened:
             points.sheen = np.broadcast_to(np.asarray(self.sheen_color, np.float64), (*shape, 3))
             points.sheen_roughness = np.full(shape, max(float(self.sheen_roughness), MIN_SHEEN_ROUGHNESS))
+        if self.anisotropic:
+            points.anisotropy = self._anisotropy(np.array([1.0, 0.0]), np.full(shape, self.anisotropy_strength))
         return points
+
+    @property
+    def anisotropic(self) -> bool:
+        """KHR_materials_anisotropy's lobe (a zero strength factor disables it, whatever the texture)."""
+        return self.anisotropy_strength > 0
+
+    @property
+    def tabulated(self) -> bool:
+        return not (self.textured or self.anisotropic)
+
+    def _anisotropy(self, direction: np.ndarray, strength: np.ndarray) -> np.ndarray:
+        """(…, 3): the direction turned by ``anisotropy_rotation`` and made unit ((1, 0) where it is zero), s²."""
+        c, s = np.cos(self.anisotropy_rotation), np.sin(self.anisotropy_rotation)
+        direction = np.broadcast_to(direction, (*np.shape(strength), 2))
+        x, y = direction[..., 0], direction[..., 1]
+        turned = np.stack([c * x - s * y, s * x + c * y], axis=-1)
+        length = np.linalg.norm(turned, axis=-1, keepdims=True)
+        unit = np.where(length > 1e-6, turned / np.maximum(length, 1e-300), [1.0, 0.0])
+        return np.concatenate([unit, (np.asarray(strength) ** 2)[..., None]], axis=-1)
 
     @property
     def sheened(self) -> bool:
@@ -468,6 +519,12 @@ class Gltf(Material):
             points.f0 = np.minimum(self.dielectric_f0 * tint, 1.0)
         if self.clearcoat > 0:
             self._coat_at(points, uv, frames)
+        if self.anisotropic:
+            direction, strength = np.array([1.0, 0.0]), np.full(n, float(self.anisotropy_strength))
+            texels = self._lookup("anisotropy_texture", uv)
+            if texels is not None:
+                direction, strength = texels[:, :2] * 2.0 - 1.0, strength * texels[:, 2]
+            points.anisotropy = self._anisotropy(direction, strength)
         if self.sheened:
             sheen = np.tile(np.asarray(self.sheen_color, np.float64), (n, 1))
             roughness = np.full(n, float(self.sheen_roughness))
@@ -539,6 +596,7 @@ class Gltf(Material):
             "BRDF_GLTF_COAT": int(self.clearcoat > 0 and not self.unlit),  # unlit: no layer reflects either
             "BRDF_GLTF_SHEEN": int(self.sheened and not self.unlit),
             "BRDF_GLTF_UNLIT": int(self.unlit),
+            "BRDF_GLTF_ANISOTROPY": int(self.anisotropic and not self.unlit),
         }
 
     def uniforms(self) -> dict[str, object]:
@@ -554,6 +612,8 @@ class Gltf(Material):
             "m_sheen": (*(float(c) for c in self.sheen_color), float(self.sheen_roughness)),
             "m_dielectric_f0": float(self.dielectric_f0),
             "m_specular": (*(float(c) for c in self.specular_color), float(self.specular)),
+            "m_anisotropy": (math.cos(self.anisotropy_rotation), math.sin(self.anisotropy_rotation),
+                             float(self.anisotropy_strength)),  # fmt: skip
         }
         for field, sampler, _, _ in SLOTS:
             ref = getattr(self, field)

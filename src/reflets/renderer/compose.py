@@ -223,8 +223,8 @@ class Auto(Technique):
         masked = any(getattr(light, "mask", None) is not None for light in scene.light)
         if masked and method != "forward" and not getattr(get_technique(method), "supports_masks", False):
             return "forward"
-        if method in CONSTANT_MATERIAL_METHODS and any(m.textured for m in scene.materials.values()):
-            return "forward"  # its integrals take a material's constant parameters, not its textures
+        if method in CONSTANT_MATERIAL_METHODS and not all(m.tabulated for m in scene.materials.values()):
+            return "forward"  # its integrals take a material's constant parameters and fitted lobe, not textures
         return method
 
     @property

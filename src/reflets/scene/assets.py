@@ -45,7 +45,7 @@ LUMINOUS_EFFICACY = 683.0
 #: material extensions read into the ``gltf`` material
 SUPPORTED_MATERIAL_EXTENSIONS = {"KHR_materials_emissive_strength", "KHR_texture_transform", "KHR_materials_clearcoat",
                                  "KHR_materials_sheen", "KHR_materials_ior", "KHR_materials_unlit",
-                                 "KHR_materials_specular"}  # fmt: skip
+                                 "KHR_materials_specular", "KHR_materials_anisotropy"}  # fmt: skip
 WRAPS = {10497: "repeat", 33071: "clamp", 33648: "mirror"}
 NEAREST_FILTERS = {9728, 9984, 9986}  # NEAREST, NEAREST_MIPMAP_NEAREST, NEAREST_MIPMAP_LINEAR (mag / min)
 
@@ -210,6 +210,9 @@ def _material(gltf: GltfFile, index: int, warnings: list[str], left_out: dict[st
                          warnings)  # fmt: skip
     if "KHR_materials_sheen" in extensions:
         out |= _sheen(gltf, extensions["KHR_materials_sheen"], f"{where}.extensions.KHR_materials_sheen", warnings)
+    if "KHR_materials_anisotropy" in extensions:
+        out |= _anisotropy(gltf, extensions["KHR_materials_anisotropy"],
+                           f"{where}.extensions.KHR_materials_anisotropy", warnings)  # fmt: skip
     mode = (m.alphaMode or "OPAQUE").lower()
     out["alpha_mode"] = mode if mode in ("opaque", "mask", "blend") else "opaque"
     if m.alphaCutoff is not None:
@@ -267,6 +270,16 @@ def _sheen(gltf: GltfFile, sheen, where: str, warnings: list[str]) -> dict:
         "sheen_color_texture": _texture(gltf, info("sheenColorTexture"), where + ".sheenColorTexture", warnings),
         "sheen_roughness_texture": _texture(gltf, info("sheenRoughnessTexture"), where + ".sheenRoughnessTexture",
                                             warnings),  # fmt: skip
+    }
+
+
+def _anisotropy(gltf: GltfFile, anisotropy, where: str, warnings: list[str]) -> dict:
+    """KHR_materials_anisotropy's strength, rotation and texture (direction in RG, strength in B)."""
+    info = _extension_textures(gltf, anisotropy, where)
+    return {
+        "anisotropy_strength": anisotropy.get("anisotropyStrength", 0.0),
+        "anisotropy_rotation": anisotropy.get("anisotropyRotation", 0.0),
+        "anisotropy_texture": _texture(gltf, info("anisotropyTexture"), where + ".anisotropyTexture", warnings),
     }
 
 

@@ -72,6 +72,13 @@ uniform mat3 m_sheen_color_map_uv;
 uniform sampler2D m_sheen_roughness_map;
 uniform mat3 m_sheen_roughness_map_uv;
 #endif
+#if BRDF_GLTF_ANISOTROPY
+uniform vec3 m_anisotropy;           // KHR_materials_anisotropy: (cos, sin) of the rotation, strength
+#endif
+#if BRDF_GLTF_ANISOTROPY_MAP
+uniform sampler2D m_anisotropy_map;
+uniform mat3 m_anisotropy_map_uv;
+#endif
 // the split sum's table of this BRDF (reflets/brdf/gltf.py, ibl_table): (A, B, P, E_sheen) at (mu, roughness)
 uniform sampler2D m_ibl_lut;
 
@@ -91,6 +98,7 @@ vec3 g_f0 = vec3(0.04);              // the dielectric's Fresnel at normal incid
 float g_specular = 1.0;
 vec3 g_sheen = vec3(0.0);            // the sheen: colour and roughness (at least 0.07, as gltf.py)
 float g_sheen_roughness = 0.07;
+vec3 g_anisotropy = vec3(1.0, 0.0, 0.0);  // the lobe's direction (cos, sin) in the shading frame, strength^2
 
 vec4 gltf_texel(sampler2D map, mat3 to_image, vec2 uv) {
     return texture(map, (to_image * vec3(uv, 1.0)).xy);
@@ -172,6 +180,18 @@ void material_surface(vec4 uvs, inout mat3 frame) {
     g_sheen_roughness *= gltf_texel(m_sheen_roughness_map, m_sheen_roughness_map_uv, GLTF_UV(BRDF_GLTF_SHEEN_ROUGHNESS_MAP)).a;
 #endif
     g_sheen_roughness = max(g_sheen_roughness, 0.07);
+#endif
+#if BRDF_GLTF_ANISOTROPY
+    vec2 direction = vec2(1.0, 0.0);
+    float strength = m_anisotropy.z;
+#if BRDF_GLTF_ANISOTROPY_MAP
+    vec3 texel = gltf_texel(m_anisotropy_map, m_anisotropy_map_uv, GLTF_UV(BRDF_GLTF_ANISOTROPY_MAP)).rgb;
+    direction = texel.rg * 2.0 - 1.0;
+    strength *= texel.b;
+#endif
+    direction = mat2(m_anisotropy.x, m_anisotropy.y, -m_anisotropy.y, m_anisotropy.x) * direction;  // turned
+    float length_ = length(direction);
+    g_anisotropy = vec3(length_ > 1e-6 ? direction / length_ : vec2(1.0, 0.0), strength * strength);
 #endif
 }
 
@@ -280,11 +300,15 @@ void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, o
     alpha = 1.0;
     return;
 #endif
-    vec3 abp = texture(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), sqrt(g_alpha))).rgb;
+    float lobe_alpha = g_alpha;
+#if BRDF_GLTF_ANISOTROPY
+    lobe_alpha = sqrt(g_alpha * mix(g_alpha, 1.0, g_anisotropy.z));  // an isotropic lobe of the same area
+#endif
+    vec3 abp = texture(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), sqrt(lobe_alpha))).rgb;
     specular_albedo = mix(g_specular * (g_f0 * abp.x + abp.y), g_base * abp.x + abp.y, g_metallic);
     float f0_max = max(g_f0.r, max(g_f0.g, g_f0.b));  // max(F) = max(F0) + (1 - max(F0)) s: F grows with F0
     diffuse_albedo = (1.0 - g_metallic) * g_base * (1.0 - g_specular * (f0_max + (1.0 - f0_max) * abp.z));
-    alpha = g_alpha;
+    alpha = lobe_alpha;
 #if BRDF_GLTF_SHEEN
     float sheen_albedo = gltf_sheen_albedo(mu);
     float scaling = max(1.0 - max(g_sheen.r, max(g_sheen.g, g_sheen.b)) * sheen_albedo, 0.0);
@@ -320,14 +344,16 @@ float gltf_coat_lobe(vec3 wo, vec3 wi) {
 }
 #endif
 
-// GGX D(h) and the Smith Lambda(w), isotropic
-float gltf_d(vec3 h, float a) {
+// GGX D(h) and the Smith Lambda(w), alpha a.x along the lobe's x axis, a.y along its y
+float gltf_d(vec3 h, vec2 a) {
     if (h.z <= 0.0) return 0.0;
-    float q = dot(h.xy, h.xy) / (a * a) + h.z * h.z;
-    return 1.0 / (PI * a * a * q * q);
+    vec2 s = h.xy / a;
+    float q = dot(s, s) + h.z * h.z;
+    return 1.0 / (PI * a.x * a.y * q * q);
 }
-float gltf_lambda(vec3 w, float a) {
-    float a2t2 = a * a * dot(w.xy, w.xy) / max(w.z * w.z, 1e-30);
+float gltf_lambda(vec3 w, vec2 a) {
+    vec2 s = a * w.xy;
+    float a2t2 = dot(s, s) / max(w.z * w.z, 1e-30);
     return a2t2 / (2.0 * (1.0 + sqrt(1.0 + a2t2)));
 }
 
@@ -338,7 +364,16 @@ vec3 brdf_eval(vec3 wo, vec3 wi) {
     if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
     vec3 h = normalize(wo + wi);
     float schlick = pow(1.0 - clamp(dot(wo, h), 0.0, 1.0), 5.0);
-    float dv = gltf_d(h, g_alpha) / ((1.0 + gltf_lambda(wo, g_alpha) + gltf_lambda(wi, g_alpha)) * 4.0 * wo.z * wi.z);
+    vec2 a = vec2(g_alpha);
+    vec3 hl = h, wol = wo, wil = wi;  // in the lobe's frame
+#if BRDF_GLTF_ANISOTROPY
+    a.x = mix(g_alpha, 1.0, g_anisotropy.z);  // alpha_t along the direction, alpha_b = alpha across
+    mat2 into = mat2(g_anisotropy.x, -g_anisotropy.y, g_anisotropy.y, g_anisotropy.x);
+    hl.xy = into * h.xy;
+    wol.xy = into * wo.xy;
+    wil.xy = into * wi.xy;
+#endif
+    float dv = gltf_d(hl, a) / ((1.0 + gltf_lambda(wol, a) + gltf_lambda(wil, a)) * 4.0 * wo.z * wi.z);
     vec3 f_d = g_f0 + (1.0 - g_f0) * schlick;  // Khronos' fresnel_mix: tinted, weighted by g_specular
     float diffuse_weight = 1.0 - g_specular * max(f_d.r, max(f_d.g, f_d.b));
     vec3 f_m = g_base + (1.0 - g_base) * schlick;
