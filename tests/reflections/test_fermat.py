@@ -307,3 +307,36 @@ def test_a_planar_mirror_shows_a_scratched_plate_as_the_mirrored_camera_sees_it(
     mask = binary_erosion(on_mirror & plate_there)  # the plate's edge pixels mix in the mirrored sky
     assert mask.sum() > 100
     assert compare(image[mask][None], expected[mask][None])["relmse"] < 1e-3
+
+
+def test_textured_objects_are_textured_in_the_mirror(ctx, tmp_path):
+    """A glTF floor with a checker texture and a cut-out card, seen directly and in the chrome sphere: the reflected
+    objects read their textures (material_surface in reflected.frag), against the ray-traced reference."""
+    from PIL import Image
+
+    checker = (np.indices((8, 8)).sum(axis=0) % 2 * 200 + 40).astype(np.uint8)
+    Image.fromarray(np.dstack([checker, checker // 2, 255 - checker]), "RGB").save(tmp_path / "checker.png")
+    stripes = np.zeros((8, 8, 4), np.uint8)
+    stripes[..., 0], stripes[..., 3] = 230, np.where(np.arange(8) % 2, 255, 0)[None, :]
+    Image.fromarray(stripes, "RGBA").save(tmp_path / "stripes.png")
+    scene = reflets.load_scene(scenes_dir() / "40_reflect_teapot_sphere.toml")
+    data = scene.model_dump(mode="json", exclude_none=True)
+    data["materials"]["floor"] = {"type": "gltf", "metallic": 0.0, "roughness": 0.9,
+                                  "base_color_texture": {"texture": str(tmp_path / "checker.png"), "filter": "nearest"}}
+    data["materials"]["card"] = {"type": "gltf", "metallic": 0.0, "roughness": 0.6, "alpha_mode": "mask",
+                                 "base_color_texture": {"texture": str(tmp_path / "stripes.png"), "filter": "nearest"}}
+    data["mesh"][1] = {"shape": "plane", "size": [1.2, 1.2], "material": "card",
+                       "transform": {"rotate": [90, 35, 0], "translate": [-1.0, 0.7, 0.7]}}  # fmt: skip
+    textured = reflets.load_dict(data, base_dir=scenes_dir())
+    size = (200, 150)
+    image = reflets.render(textured, method="fermat", size=size)
+    ref = reflets.reference(textured, spp=1, size=size, progress=False)
+    assert relmse(image, ref.image) < 0.02
+    plain = reflets.load_scene(scenes_dir() / "40_reflect_teapot_sphere.toml")
+    sphere = reflets.render(plain, method="position", size=size)
+    on_sphere = np.linalg.norm(sphere - np.array([0.2, 0.7, -0.3]), axis=-1) < 0.71
+    factors = {k: m.model_copy(update={"base_color_texture": None, "alpha_mode": "opaque"}) if m.type == "gltf" else m
+               for k, m in textured.materials.items()}  # fmt: skip
+    untextured = reflets.render(textured.model_copy(update={"materials": factors}), method="fermat", size=size)
+    mse = lambda a, b: np.mean((a[on_sphere] - b[on_sphere]) ** 2)  # noqa: E731
+    assert mse(untextured, image) > 10 * mse(image, ref.image)  # the mirror shows the textures

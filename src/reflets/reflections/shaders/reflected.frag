@@ -22,6 +22,7 @@ in vec3 v_position;
 in vec3 v_normal;
 in vec4 v_tangent;
 in vec2 v_uv;
+in vec2 v_uv1;
 in vec3 v_mirror_point;
 in float v_valid;
 
@@ -58,11 +59,20 @@ void main() {
     vec3 n = normalize(v_normal);
     if (dot(n, to_eye) < 0.0) n = -n;  // two-sided surfaces, as seen from P
     mat3 frame = shading_frame(n, v_tangent);
+#ifdef MATERIAL_SURFACE
+    material_surface(vec4(v_uv, v_uv1), frame);  // a textured material: its textures, as in direct view
+    material_antialias(n);
+    if (!material_covered()) discard;
+#endif
     vec3 wo = transpose(frame) * normalize(to_eye);
 #if SCRATCHED
     f_color = vec4(scratched_radiance(v_position, frame, wo, v_uv, uvec2(gl_FragCoord.xy)), 1.0);
 #else
-    f_color = vec4(direct_lighting(v_position, frame, wo), 1.0);
+    vec3 radiance = direct_lighting(v_position, frame, wo);
+#ifdef MATERIAL_SURFACE
+    radiance += material_emission();
+#endif
+    f_color = vec4(radiance, 1.0);
 #endif
 #endif
 }

@@ -7,6 +7,7 @@ layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec4 in_tangent;
 layout(location = 3) in vec2 in_uv;
+layout(location = 4) in vec2 in_uv1;
 
 uniform mat4 u_view_proj;
 uniform vec3 u_eye;
@@ -16,6 +17,7 @@ out vec3 v_position;
 out vec3 v_normal;
 out vec4 v_tangent;
 out vec2 v_uv;
+out vec2 v_uv1;
 out vec3 v_mirror_point;
 out float v_valid;
 
@@ -25,6 +27,7 @@ void main() {
     v_normal = in_normal;
     v_tangent = in_tangent;
     v_uv = in_uv;
+    v_uv1 = in_uv1;
     v_mirror_point = r.position;
     // converged is enough here: where P faces away from E (or V lies behind the mirror) the fragment tests of
     // reflected.frag remove the part of the triangle that is not seen, so the rest of it is not lost
