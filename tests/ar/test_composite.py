@@ -99,3 +99,33 @@ def test_the_differential_renderers_follow_the_camera_under_the_same_map(setting
     assert np.array_equal(second.image, fresh.image)
     kept.release()
     assert kept._local is None
+
+
+@pytest.mark.slow
+def test_a_textured_object_is_composited_with_its_textures(setting, tmp_path):
+    """A glTF material with a base colour texture (red left half, blue right half of its uv) on the virtual sphere:
+    the differential composite shows both halves where the object is; the document's mode, whose model is Phong's,
+    refuses it in one line."""
+    from PIL import Image
+
+    from reflets.errors import ArgumentError
+
+    _, intrinsics, R, t, _, photo, _, cube = setting
+    codes = np.zeros((4, 8, 3), np.uint8)
+    codes[:, :4] = (220, 30, 30)
+    codes[:, 4:] = (30, 30, 220)
+    Image.fromarray(codes, "RGB").save(tmp_path / "halves.png")
+    texture = {"texture": str(tmp_path / "halves.png"), "filter": "nearest"}
+    objects = load_dict({
+        "camera": {"position": [0, 1, 1], "look_at": [0, 0, 0]},
+        "materials": {"painted": {"type": "gltf", "metallic": 0.0, "roughness": 0.7, "base_color_texture": texture}},
+        "mesh": [{"shape": "sphere", "radius": RADIUS, "transform": {"translate": list(CENTRE)},
+                  "material": "painted"}],
+    })  # fmt: skip
+    out = Compositor(objects, "differential", samples=4000, directions=200)(photo, intrinsics, R, t, cube)
+    inside = out.coverage == 1.0
+    assert inside.sum() > 50
+    red, blue = out.linear[inside][:, 0], out.linear[inside][:, 2]
+    assert (red > 2 * blue).sum() > 10 and (blue > 2 * red).sum() > 10  # both halves seen, each its colour
+    with pytest.raises(ArgumentError, match="materials.painted: the document's mode shades"):
+        Compositor(objects, "document", samples=4000, directions=200)(photo, intrinsics, R, t, cube)
