@@ -233,9 +233,13 @@ def _check_uv_sets(scene: Scene) -> None:
 
 def _check_textures(scene: Scene, name: str, material, source) -> None:
     """Texture paths made absolute (materials resolve them without the scene) and present; images of a glTF file
-    must exist in it."""
+    must exist in it. A material's own base material (a scratched one's) likewise."""
+    from ..brdf.base import Material
     from ..textures import TextureRef
 
+    base = getattr(material, "base", None)
+    if isinstance(base, Material):
+        _check_textures(scene, f"{name}.base", base, source)
     for key in type(material).model_fields:
         ref = getattr(material, key)
         if not isinstance(ref, TextureRef):

@@ -37,6 +37,7 @@ Tables and α maps are cached in memory and on disk under ``$XDG_CACHE_HOME/refl
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, ClassVar, Literal, Union
 
@@ -46,6 +47,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from ..brdf.ashikhmin_shirley import AshikhminShirley
 from ..brdf.base import LIGHT_TYPES, RGB, Material, Oriented, register_material
 from ..brdf.blinn_phong import BlinnPhong
+from ..brdf.gltf import Gltf
 from ..brdf.lafortune import Lafortune
 from ..brdf.lambert import Lambert
 from ..brdf.measured import Measured
@@ -83,7 +85,7 @@ PositiveRGB = tuple[Positive, Positive, Positive]
 
 #: the base BRDF: any material of the library except scratched, translucent and mirror
 BaseSpec = Annotated[
-    Union[Lambert, Phong, BlinnPhong, Lafortune, Ward, AshikhminShirley, Microfacet, Measured],  # noqa: UP007
+    Union[Lambert, Phong, BlinnPhong, Lafortune, Ward, AshikhminShirley, Microfacet, Measured, Gltf],  # noqa: UP007
     Field(discriminator="type"),
 ]
 
@@ -133,7 +135,7 @@ class Scratched(Oriented, Material):
         Rays per φ_in column of the table.
     base : material table, default GGX α = 0.08 with iron's conductor Fresnel
         The base BRDF ρ_b: any type but scratched, translucent and mirror (a measured file is not resolved
-        against the scene folder).
+        against the scene folder); a ``gltf`` base's textures are read per pixel.
     preset : "3.14b" | "3.14c" | "3.14d" | "3.11bde" | "3.11f" | "3.15a" | "3.15b" | "3.15c" | "3.15d" | "3.17a"
         | "3.17b", default "3.14b" when no layer parameter is given
         A row of the document's Table 3.1; the explicit parameters below override it.
@@ -268,6 +270,27 @@ class Scratched(Oriented, Material):
 
     def pdf(self, wo, wi):
         return self.base.pdf(wo, wi)
+
+    # a textured base (a glTF material): its parameters at each point, as the GLSL twin's material_surface reads them
+    @property
+    def textured(self) -> bool:
+        return self.base.textured
+
+    @property
+    def tabulated(self) -> bool:
+        return self.base.tabulated
+
+    def at(self, uv: np.ndarray, frames=None):
+        """The finite part at mesh uv: the base there (its textures), weighted by its uncovered share."""
+        if not self.base.textured:
+            return self
+        return _WeightedBase(self.base.at(uv, frames), self.base_weight())
+
+    def shading_frame(self, frame: np.ndarray, uv: np.ndarray) -> np.ndarray:
+        return self.base.shading_frame(frame, uv)
+
+    def emission(self, uv: np.ndarray) -> np.ndarray:
+        return self.base.emission(uv)
 
     def techniques(self, mesh) -> dict[str, str]:
         """The ``scratches`` pass under every light: the scratch lobes (thickened delta lights, midpoint samples of
@@ -424,6 +447,23 @@ def bake_layer(k: int, angle: float, material: Scratched) -> np.ndarray:
         total += np.bincount(index[inside], weights=w[inside], minlength=R * R)
     texel = 1.0 / (R * R)
     return (1.0 - np.exp(-total / texel)).reshape(R, R)
+
+
+@dataclass
+class _WeightedBase:
+    """A scratched material's finite part at N points: the base's per-point BRDF × its uncovered share."""
+
+    base: object
+    weight: float
+
+    def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        return self.weight * self.base.eval(wo, wi)
+
+    def sample(self, wo, u1, u2):
+        return self.base.sample(wo, u1, u2)
+
+    def pdf(self, wo, wi):
+        return self.base.pdf(wo, wi)
 
 
 def mip_levels(base: np.ndarray) -> list[np.ndarray]:

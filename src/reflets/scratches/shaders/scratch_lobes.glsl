@@ -30,7 +30,7 @@ uniform mat3 s_env_from_world;
 const float HALF_PI = 1.57079632679489661923;
 const float ALPHA_CULL = 1e-6;
 
-float g_alpha[S_LAYERS];
+float g_layer_alpha[S_LAYERS];
 
 int phi_bin(float phi) {
     return clamp(int(floor((phi + HALF_PI) * float(S_TABLE) / PI)), 0, S_TABLE - 1);
@@ -64,7 +64,7 @@ vec3 thick_light(vec3 wo, vec3 wl, vec3 E, float norm, inout uint rng) {
     float H = s_thickness;
     vec3 sum = vec3(0.0);
     for (int k = 0; k < S_LAYERS; ++k) {
-        if (g_alpha[k] <= 0.0) continue;
+        if (g_layer_alpha[k] <= 0.0) continue;
         vec2 o = cone_angles(wo, s_dir[k]);
         vec2 l = cone_angles(wl, s_dir[k]);
         float delta = l.x + o.x;
@@ -84,7 +84,7 @@ vec3 thick_light(vec3 wo, vec3 wl, vec3 E, float norm, inout uint rng) {
             float pdf;
             acc += rho_s(b, phi_bin(phi), x, pdf) * (cos(phi) * f * f);
         }
-        sum += (g_alpha[k] / norm) * acc * ((hi - lo) / float(S_LIGHT_SAMPLES) * c);
+        sum += (g_layer_alpha[k] / norm) * acc * ((hi - lo) / float(S_LIGHT_SAMPLES) * c);
     }
     return sum * E;
 }
@@ -106,7 +106,7 @@ vec3 scratched_radiance(vec3 x, mat3 frame, vec3 wo, vec2 uv, uvec2 pixel) {
             int k = 4 * p + c;
             if (k >= S_LAYERS) break;
             float a = a4[c] >= ALPHA_CULL ? a4[c] : 0.0;
-            g_alpha[k] = a;
+            g_layer_alpha[k] = a;
             abar += a;
             if (a > 0.0) last = k;
         }
@@ -162,7 +162,7 @@ vec3 scratched_radiance(vec3 x, mat3 frame, vec3 wo, vec2 uv, uvec2 pixel) {
             int k = 0;
             float cum = 0.0;
             for (int m = 0; m < S_LAYERS; ++m) {
-                cum += g_alpha[m];
+                cum += g_layer_alpha[m];
                 if (cum <= target) k = m + 1;
             }
             k = min(k, last);

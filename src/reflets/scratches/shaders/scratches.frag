@@ -10,6 +10,7 @@ in vec3 v_position;
 in vec3 v_normal;
 in vec4 v_tangent;
 in vec2 v_uv;
+in vec2 v_uv1;
 
 uniform vec3 u_eye;
 
@@ -19,6 +20,11 @@ void main() {
     vec3 n = normalize(v_normal);
     if (!gl_FrontFacing) n = -n;
     mat3 frame = shading_frame(n, v_tangent);
+#ifdef MATERIAL_SURFACE
+    material_surface(vec4(v_uv, v_uv1), frame);  // a textured base (a glTF material): its textures into its parameters
+    material_antialias(n);
+    if (!material_covered()) discard;
+#endif
 #if OUTPUT == 1
     f_color = vec4(v_position, 1.0);
 #elif OUTPUT == 2
@@ -27,6 +33,10 @@ void main() {
     f_color = vec4(v_uv, 0.0, 1.0);
 #else
     vec3 wo = transpose(frame) * normalize(u_eye - v_position);
-    f_color = vec4(scratched_radiance(v_position, frame, wo, v_uv, uvec2(gl_FragCoord.xy)), 1.0);
+    vec3 radiance = scratched_radiance(v_position, frame, wo, v_uv, uvec2(gl_FragCoord.xy));
+#ifdef MATERIAL_SURFACE
+    radiance += material_emission();
+#endif
+    f_color = vec4(radiance, 1.0);
 #endif
 }

@@ -1,0 +1,36 @@
+"""Scratches over a textured base (a glTF material with its textures): the scratches pass reads the base's textures
+as the forward pass does (material_surface), and the reference's finite part reads them too."""
+
+from __future__ import annotations
+
+import numpy as np
+from PIL import Image
+
+import reflets
+from reflets.metrics import relmse
+
+
+def test_scratches_over_a_textured_gltf_base(tmp_path):
+    checker = (np.indices((8, 8)).sum(axis=0) % 2 * 200 + 40).astype(np.uint8)
+    Image.fromarray(np.dstack([checker, checker // 2, 255 - checker]), "RGB").save(tmp_path / "checker.png")
+    base = {"type": "gltf", "metallic": 0.6, "roughness": 0.35,
+            "base_color_texture": {"texture": str(tmp_path / "checker.png"), "filter": "nearest"}}  # fmt: skip
+
+    def scene(coverage, material=base):
+        scratched = {"type": "scratched", "preset": "3.14d", "profile": "quartic:0.5", "coverage": coverage,
+                     "base": material, "alpha_size": 64, "table_size": 32, "rays": 2000}  # fmt: skip
+        return reflets.load_dict({
+            "camera": {"position": [0, 1.2, 2.0], "look_at": [0, 0, -0.2], "size": [96, 72]},
+            "materials": {"s": scratched},
+            "mesh": [{"shape": "plane", "size": [2.4, 2.4], "material": "s"}],
+            "light": [{"type": "point", "position": [0.3, 1.0, -1.2], "intensity": [2, 2, 2]}],
+        })  # fmt: skip
+
+    bare = scene(0.0)  # no scratch: the base alone, as forward shades it
+    image = reflets.render(bare, method="scratches")
+    alone = bare.model_copy(update={"materials": {"s": bare.materials["s"].base}})
+    np.testing.assert_allclose(image, reflets.render(alone, method="forward"), rtol=1e-5, atol=1e-6)
+    assert relmse(image, reflets.reference(bare, spp=4, progress=False).image) < 1e-3  # measured 3e-7
+    scratched = reflets.render(scene(0.02), method="scratches")
+    untextured = {key: value for key, value in base.items() if key != "base_color_texture"}
+    assert relmse(reflets.render(scene(0.02, untextured), method="scratches"), scratched) > 0.1  # measured 0.35
