@@ -26,6 +26,8 @@ Conventions (each checked by ``tests/reference/test_mitsuba_bridge.py``):
   :class:`~reflets.errors.SceneError`. Mitsuba takes the tangent from the per-triangle ∂p/∂u of the uv
   (projected onto the shading normal), not from our interpolated vertex tangents: identical on planes,
   slightly different on curved anisotropic surfaces; its Beckmann masking is Walter's rational fit (≤ 0.4 %).
+  ``gltf`` → ``principled`` with bitmap textures, ``normalmap`` and an area emitter (docs/reference.md: where
+  Disney's BSDF differs from Appendix B, and by how much).
 * **Lights.** ``point`` → ``point`` (intensity, W/sr); ``directional`` → ``directional`` (Mitsuba's
   ``direction`` is also the way the light travels); ``quad`` → ``rectangle`` (a two-triangle mesh when
   the parallelogram is not a rectangle: Mitsuba's rectangle must not be sheared) with an ``area``
@@ -79,7 +81,8 @@ PIXEL_FILTERS = ("box", "tent", "gaussian")
 #: relative offset of the flipped copy of a two-sided area light (times the light's largest edge)
 TWO_SIDED_GAP = 1e-4
 
-_SUPPORTED = "supported: lambert; microfacet with fresnel none/dielectric/conductor, separable masking, diffuse 0"
+_SUPPORTED = ("supported: lambert; microfacet with fresnel none/dielectric/conductor, separable masking, diffuse 0; "
+              "gltf (metallic-roughness, its textures, normal map, emission) as principled")
 
 
 class MitsubaUnavailableError(RefletsError):
@@ -171,6 +174,8 @@ def material_to_mitsuba(name: str, material) -> dict[str, Any]:
         inner = {"type": "diffuse", "reflectance": _rgb(material.albedo)}
     elif kind == "microfacet":
         inner = _microfacet_to_mitsuba(name, material)
+    elif kind == "gltf":
+        inner = _gltf_to_mitsuba(name, material)
     else:
         raise _unsupported(name, kind, "no matching Mitsuba BSDF")
     return {"type": "twosided", "bsdf": inner}
@@ -212,6 +217,78 @@ def _microfacet_to_mitsuba(name: str, material) -> dict[str, Any]:
     else:
         raise _unsupported(name, "microfacet", f"fresnel '{fresnel}'")
     return out
+
+
+def _gltf_to_mitsuba(name: str, m) -> dict[str, Any]:
+    """glTF's metallic-roughness material as Mitsuba's ``principled`` BSDF (Disney's: its diffuse has Burley's
+    retro-reflection where Appendix B has Lambert's — docs/reference.md measures the difference), each factor ×
+    its texture as an in-memory bitmap of linear values (bilinear or nearest, the texture's uv transform as
+    ``to_uv``), the normal map through ``normalmap``; F₀ = 0.08 × ``specular`` gives the ior's 0.04."""
+    refused = [(m.clearcoat > 0, "a clear coat (Disney's coat is not KHR_materials_clearcoat's)"),
+               (m.sheened, "a sheen (Disney's is not the Charlie sheen)"),
+               (m.anisotropic, "anisotropy"), (m.unlit, "unlit"),
+               (m.alpha_mode != "opaque", f"alphaMode {m.alpha_mode.upper()}"),
+               (m.specular != 1.0 or tuple(m.specular_color) != (1.0, 1.0, 1.0) or m.specular_texture is not None
+                or m.specular_color_texture is not None, "KHR_materials_specular"),
+               (m.ior == 0, "ior 0"),
+               (any(getattr(m, f) is not None and getattr(m, f).uv for f in _GLTF_MAPS), "a second uv set"),
+               (any(getattr(m, f) is not None for f in _GLTF_OTHER_MAPS), "an extension's texture")]  # fmt: skip
+    for found, what in refused:
+        if found:
+            raise _unsupported(name, "gltf", what)
+    base = np.asarray(m.base_color[:3], np.float64)
+    out: dict[str, Any] = {"type": "principled", "specular": float(m.dielectric_f0 / 0.08),
+                           "base_color": _gltf_map(m, "base_color_texture", base, slice(0, 3), name),
+                           "metallic": _gltf_map(m, "metallic_roughness_texture", m.metallic, 2, name),
+                           "roughness": _gltf_map(m, "metallic_roughness_texture", m.roughness, 1, name)}  # fmt: skip
+    if m.normal_texture is None:
+        return out
+    data = m.texture_data("normal_texture")
+    local = data.texels[..., :3].astype(np.float64) * 2.0 - 1.0
+    local[..., :2] *= m.normal_scale
+    local /= np.maximum(np.linalg.norm(local, axis=-1, keepdims=True), 1e-12)
+    return {"type": "normalmap", "normalmap": _bitmap(m.normal_texture, local * 0.5 + 0.5, name), "bsdf": out}
+
+
+#: the gltf material's texture fields the bridge reads (an occlusion map is ignored: it occludes environment light
+#: only in the real-time renderer, and the references trace the occlusion itself)
+_GLTF_MAPS = ("base_color_texture", "metallic_roughness_texture", "normal_texture", "emissive_texture")
+_GLTF_OTHER_MAPS = ("clearcoat_texture", "clearcoat_roughness_texture", "clearcoat_normal_texture",
+                    "sheen_color_texture", "sheen_roughness_texture", "anisotropy_texture")  # fmt: skip
+
+
+def _gltf_map(m, field: str, factor, channel, name: str):
+    """A factor × a texture's channel(s) as a Mitsuba texture (the factor alone without a texture)."""
+    ref = getattr(m, field)
+    if ref is None:
+        return _rgb(factor) if np.ndim(factor) else float(factor)
+    values = m.texture_data(field).texels[..., channel].astype(np.float64) * factor
+    return _bitmap(ref, values, name)
+
+
+def _bitmap(ref, values: np.ndarray, name: str) -> dict[str, Any]:
+    """An in-memory float bitmap of linear values (row 0 at Mitsuba's v = 0: the image's top, as ours) read through
+    ``ref``'s uv transform (mesh uv, v up → image uv) with its filter and wrap mode."""
+    mi = mitsuba_module()
+    if ref.wrap[0] != ref.wrap[1]:
+        raise _unsupported(name, "gltf", f"wrap modes {ref.wrap[0]} / {ref.wrap[1]} (Mitsuba's bitmap has one)")
+    matrix = np.eye(4)
+    uv = ref.uv_matrix()
+    matrix[:2, :2], matrix[:2, 3] = uv[:2, :2], uv[:2, 2]
+    return {"type": "bitmap", "bitmap": mi.Bitmap(np.ascontiguousarray(values, np.float32)), "raw": True,
+            "filter_type": "nearest" if ref.filter == "nearest" else "bilinear",
+            "wrap_mode": {"repeat": "repeat", "clamp": "clamp", "mirror": "mirror"}[ref.wrap[0]],
+            "to_uv": _transform(matrix)}  # fmt: skip
+
+
+def material_emitter(material) -> dict[str, Any] | None:
+    """The ``area`` emitter of a glTF material's emission (× its texture), or None."""
+    if getattr(material, "type", "") != "gltf" or material.unlit:
+        return None
+    emitted = np.asarray(material.emissive, np.float64) * material.emissive_strength
+    if not np.any(emitted > 0):
+        return None
+    return {"type": "area", "radiance": _gltf_map(material, "emissive_texture", emitted, slice(0, 3), "emission")}
 
 
 def _area_emitter(radiance, texture: Path | None = None) -> dict[str, Any]:
@@ -402,6 +479,9 @@ def to_mitsuba_dict(
         positions.append(data.positions.astype(np.float64))
         path = write_ply(workdir / f"mesh_{i}.ply", data.positions, data.indices, data.normals, data.uvs)
         out[f"mesh_{i}"] = {"type": "ply", "filename": str(path), "face_normals": False, "bsdf": bsdfs[mesh.material]}
+        emitter = material_emitter(scene.materials[mesh.material])
+        if emitter is not None:
+            out[f"mesh_{i}"]["emitter"] = emitter
 
     for i, light in enumerate(scene.light):
         if isinstance(light, PointLight) and light.spot is not None:
