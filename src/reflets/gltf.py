@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ArgumentError
+from .errors import OutputError
 
 ANISOTROPY = "KHR_materials_anisotropy"
 SPECULAR = "KHR_materials_specular"
@@ -268,16 +268,18 @@ def _gltf_camera(g, cam, boxes: np.ndarray):
     return g.Camera(type="perspective", perspective=perspective)
 
 
-def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
-    """Write ``scene`` as a .glb; returns the path and the approximations made (one line each)."""
+def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path, list[str]]:
+    """Write ``scene`` as a .glb (atomically; an existing file — the scene's own input among them — is refused
+    unless ``overwrite``); returns the path and the approximations made (one line each)."""
     import pygltflib as g
 
+    from .imageio import atomic_write, check_output_path
     from .scene.assets import LUMINOUS_EFFICACY
     from .scene.geometry import mesh_data
 
-    path = Path(path)
-    if path.suffix.lower() != ".glb":
-        raise ArgumentError(f"the output is a binary glTF (.glb), got '{path.name}'", file=path)
+    path = check_output_path(path, (".glb",))
+    if path.exists() and not overwrite:
+        raise OutputError("exists already; choose another name (nothing was written)", file=path)
     notes: list[str] = []
     blob = bytearray()
     views, accessors = [], []
@@ -396,8 +398,7 @@ def export_gltf(scene, path: str | Path) -> tuple[Path, list[str]]:
         extensions={LIGHTS: {"lights": lights}} if lights else {},
     )
     document.set_binary_blob(bytes(blob))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    document.save_binary(str(path))
+    atomic_write(path, b"".join(document.save_to_bytes()))
     return path, notes
 
 

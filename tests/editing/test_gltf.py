@@ -103,3 +103,24 @@ def test_cameras_export_and_read_back_both_projections(tmp_path):
             assert 3.5 <= back.far < 4.0, back.far
         else:
             assert back.fov_y == pytest.approx(30)
+
+
+def test_outputs_are_checked_before_anything_is_written(tmp_path, capsys):
+    """An existing file (the input itself among them), a directory, a missing folder: one line, exit 2, nothing
+    written or created; a new name is written whole (no temporary file left)."""
+    scene = str(scene_path("03_shapes.toml"))
+    existing = tmp_path / "existing.glb"
+    existing.write_bytes(b"mine")
+    (tmp_path / "folder.glb").mkdir()
+    for output, phrase in [(existing, "exists already"), (tmp_path / "folder.glb", "is a directory"),
+                           (tmp_path / "missing" / "x.glb", "does not exist")]:  # fmt: skip
+        assert main(["export-gltf", scene, "-o", str(output)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and phrase in err[0] and str(output) in err[0], err
+    assert existing.read_bytes() == b"mine" and not (tmp_path / "missing").exists()
+    first = tmp_path / "first.glb"
+    assert main(["export-gltf", scene, "-o", str(first)]) == 0
+    before = first.read_bytes()
+    assert main(["export-gltf", str(first), "-o", str(first)]) == 2  # its own input
+    assert first.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["existing.glb", "first.glb", "folder.glb"]
