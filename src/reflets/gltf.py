@@ -21,7 +21,6 @@ edited orientation field (highlight editing) is seen outside reflets.
 
 from __future__ import annotations
 
-import io
 import math
 from pathlib import Path
 
@@ -81,17 +80,10 @@ class _Textures:
     def _encoded(ref, role_srgb: bool, where: str, notes: list[str]) -> tuple[bytes, str]:
         """The image's own bytes when glTF can hold them as they are (PNG / JPEG, no swizzle, the slot's
         encoding), else its decoded texels as a PNG in the slot's encoding."""
-        from PIL import Image
+        from .imageio import _encode_png, linear_to_srgb
+        from .textures import load_texture, texture_bytes
 
-        from .imageio import linear_to_srgb
-        from .textures import load_texture
-
-        if ref.image is not None:
-            from .gltf_file import read_gltf
-
-            data = read_gltf(ref.texture).image_bytes(ref.image)
-        else:
-            data = Path(ref.texture).read_bytes()
+        data, _ = texture_bytes(ref)
         mime = "image/png" if data.startswith(PNG_MAGIC) else "image/jpeg" if data.startswith(JPEG_MAGIC) else None
         srgb = role_srgb if ref.srgb is None else ref.srgb
         if mime is not None and ref.channels in (None, "rgba") and srgb == role_srgb:
@@ -105,9 +97,7 @@ class _Textures:
             codes = np.clip(np.rint(values * 255.0), 0, 255).astype(np.uint8)
             notes.append(f"{where}: re-encoded {'as sRGB' if role_srgb else 'linear'} (glTF fixes each slot's "
                          f"encoding; 8-bit rounding)")  # fmt: skip
-        out = io.BytesIO()
-        Image.fromarray(np.ascontiguousarray(codes), "RGBA").save(out, format="PNG")
-        return out.getvalue(), "image/png"
+        return _encode_png(np.ascontiguousarray(codes)), "image/png"
 
 
 def _gltf_material(name: str, m, textures: _Textures) -> tuple[dict, list[str]]:
@@ -167,8 +157,16 @@ def _gltf_material(name: str, m, textures: _Textures) -> tuple[dict, list[str]]:
                                   "anisotropyRotation": m.anisotropy_rotation,
                                   "anisotropyTexture": info("anisotropy_texture")}  # fmt: skip
     if extensions:
-        out["extensions"] = {key: _without_none(value) for key, value in extensions.items()}
+        out["extensions"] = extensions
     return _without_none(out), notes
+
+
+def _reads_second_set(material) -> bool:
+    """A texture of this material (a scratched one's base) reads the second uv set."""
+    from .textures import TextureRef
+
+    source = material.base if material.type == "scratched" else material
+    return any(isinstance(ref, TextureRef) and ref.uv == 1 for ref in vars(source).values())
 
 
 def _without_none(d: dict) -> dict:
@@ -254,8 +252,8 @@ def material_to_gltf(name: str, material) -> tuple[dict, list[str]]:
 
 def _gltf_camera(g, cam, boxes: np.ndarray):
     """The scene camera as a glTF camera (orthographic: xmag / ymag are half the view window's width / height, its
-    required zfar the renderer's own: ``camera_range`` of the meshes' boxes — a far plane beyond them would spend
-    the linear depth's float32 precision on empty space)."""
+    required zfar the renderer's own: ``camera_range`` of the meshes' and emitters' boxes — a far plane beyond them
+    would spend the linear depth's float32 precision on empty space)."""
     from .scene.geometry import camera_range
 
     if cam.orthographic:
@@ -275,7 +273,7 @@ def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path,
 
     from .imageio import atomic_write, check_output_path
     from .scene.assets import LUMINOUS_EFFICACY
-    from .scene.geometry import mesh_data
+    from .scene.geometry import bounding_boxes, mesh_data
 
     path = check_output_path(path, (".glb",))
     if path.exists() and not overwrite:
@@ -305,16 +303,19 @@ def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path,
     textures = _Textures(add_view)
     for name in names:
         material = scene.materials[name]
-        if material.type == "gltf":
-            material, found = _gltf_material(name, material, textures)
+        source = material.base if material.type == "scratched" else material
+        if source.type == "gltf":  # a real asset's material (a scratched one's base), as it is
+            exported, found = _gltf_material(name, source, textures)
+            if source is not material:
+                found.insert(0, f"{name}: scratched, exported by its base BRDF (the scratch lobes have no glTF form)")
         else:
-            material, found = material_to_gltf(name, material)
-        materials.append(material)
+            exported, found = material_to_gltf(name, material)
+        materials.append(exported)
         notes += found
-    meshes, nodes, boxes = [], [], []
+    meshes, nodes, points = [], [], []  # points: every exported vertex, for an orthographic camera's far plane
     for index, mesh in enumerate(scene.mesh):
         data = mesh_data(scene, index)
-        boxes.append((data.positions.min(axis=0), data.positions.max(axis=0)))
+        points.append(data.positions)
         attributes = g.Attributes(
             POSITION=add(data.positions.astype(np.float32), g.ARRAY_BUFFER, g.VEC3, g.FLOAT, bounds=True),
             NORMAL=add(data.normals.astype(np.float32), g.ARRAY_BUFFER, g.VEC3, g.FLOAT),
@@ -323,8 +324,9 @@ def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path,
                 np.stack([data.uvs[:, 0], 1.0 - data.uvs[:, 1]], 1).astype(np.float32), g.ARRAY_BUFFER, g.VEC2, g.FLOAT
             ),
         )
-        if data.uvs1 is not None:
-            attributes.TEXCOORD_1 = add(np.stack([data.uvs1[:, 0], 1.0 - data.uvs1[:, 1]], 1).astype(np.float32),
+        if data.uvs1 is not None or _reads_second_set(scene.materials[mesh.material]):  # what reflets renders
+            second = data.uv_sets[:, 2:]
+            attributes.TEXCOORD_1 = add(np.stack([second[:, 0], 1.0 - second[:, 1]], 1).astype(np.float32),
                                         g.ARRAY_BUFFER, g.VEC2, g.FLOAT)  # fmt: skip
         indices = add(data.indices.astype(np.uint32).ravel(), g.ELEMENT_ARRAY_BUFFER, g.SCALAR, g.UNSIGNED_INT)
         primitive = g.Primitive(attributes=attributes, indices=indices, material=names.index(mesh.material))
@@ -336,14 +338,8 @@ def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path,
             power = light.intensity if light.type == "point" else light.irradiance  # W/sr, W/m²
             peak = max(float(max(power)), 1e-30)
             spot = light.spot if light.type == "point" else None
-            lights.append(
-                {
-                    "type": "spot" if spot else light.type,
-                    "color": [float(c) / peak for c in power],
-                    "intensity": peak * LUMINOUS_EFFICACY,
-                    "name": f"light[{index}]",
-                }
-            )  # cd, lx; fmt: skip
+            lights.append({"type": "spot" if spot else light.type, "color": [float(c) / peak for c in power],
+                           "intensity": peak * LUMINOUS_EFFICACY, "name": f"light[{index}]"})  # cd, lx; fmt: skip
             if spot is not None:
                 lights[-1]["spot"] = {"innerConeAngle": float(np.radians(spot.inner_deg)),
                                       "outerConeAngle": float(np.radians(spot.outer_deg))}  # fmt: skip
@@ -356,6 +352,7 @@ def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path,
             nodes.append(node)
         elif light.type in ("quad", "polygon"):
             poly = np.asarray(light.polygon(), np.float32)
+            points.append(poly)
             fan = np.array([[0, k, k + 1] for k in range(1, len(poly) - 1)], np.uint32).ravel()
             peak = max(float(max(light.radiance)), 1e-30)
             materials.append({"name": f"light[{index}]", "emissiveFactor": [float(c) / peak for c in light.radiance],
@@ -393,7 +390,7 @@ def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path,
         textures=[g.Texture(**texture) for texture in textures.textures],
         bufferViews=views,
         buffers=[g.Buffer(byteLength=len(blob))],
-        cameras=[_gltf_camera(g, cam, np.asarray(boxes, np.float64).reshape(-1, 2, 3))],
+        cameras=[_gltf_camera(g, cam, bounding_boxes(points))],
         extensionsUsed=used,
         extensions={LIGHTS: {"lights": lights}} if lights else {},
     )

@@ -124,3 +124,19 @@ def test_outputs_are_checked_before_anything_is_written(tmp_path, capsys):
     assert main(["export-gltf", str(first), "-o", str(first)]) == 2  # its own input
     assert first.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["existing.glb", "first.glb", "folder.glb"]
+
+
+def test_an_orthographic_far_plane_holds_the_exported_emitters(tmp_path):
+    """The quad light, exported as emissive geometry 2 units behind the sphere, lies within the camera's zfar."""
+    from reflets.gltf import export_gltf
+
+    scene = reflets.load_dict({
+        "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "size": [64, 48], "projection": "orthographic",
+                   "ortho_height": 1.5},
+        "materials": {"m": {"type": "lambert", "albedo": [0.5, 0.5, 0.5]}},
+        "mesh": [{"shape": "sphere", "radius": 0.5, "segments": [16, 8], "material": "m"}],
+        "light": [{"type": "quad", "corners": [[-1, -1, -2], [1, -1, -2], [-1, 1, -2]], "radiance": [1, 1, 1],
+                   "two_sided": True}],
+    })  # fmt: skip
+    path, _ = export_gltf(scene, tmp_path / "o.glb")
+    assert reflets.load_scene(path).camera.far >= 5.0  # the quad is 5 away along the view (was 3.5: the sphere's)

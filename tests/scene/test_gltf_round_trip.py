@@ -83,3 +83,27 @@ def test_textures_glTF_cannot_hold_as_stored_are_re_encoded_and_the_image_matche
     before = reflets.render(scene, method="forward")
     after = reflets.render(back.model_copy(update={"camera": scene.camera}), method="forward")
     assert relmse(after, before) < 1e-4
+
+
+def test_a_scratched_gltf_base_and_a_lone_second_set_export_as_reflets_renders_them(tmp_path):
+    """A scratched material over a glTF base is written as its base (said); a texture on uv set 1 of a mesh with one
+    set gets TEXCOORD_1 = the first set (what reflets reads, with its warning), so the file stays valid."""
+    from PIL import Image
+
+    Image.fromarray(np.zeros((4, 4, 3), np.uint8), "RGB").save(tmp_path / "t.png")
+    texture = {"texture": str(tmp_path / "t.png"), "uv": 1}
+    scene = reflets.load_dict({
+        "camera": {"position": [0, 1, 3], "look_at": [0, 0, 0], "size": [32, 24]},
+        "materials": {"s": {"type": "scratched", "base": {"type": "gltf", "base_color_texture": texture}}},
+        "mesh": [{"shape": "sphere", "radius": 0.5, "material": "s"}],
+        "light": [{"type": "point", "position": [0, 2, 2], "intensity": [1, 1, 1]}],
+    })  # fmt: skip
+    path, notes = export_gltf(scene, tmp_path / "out.glb")
+    assert notes[0] == "s: scratched, exported by its base BRDF (the scratch lobes have no glTF form)"
+    document = pygltflib.GLTF2.load(str(path))
+    assert document.materials[0].pbrMetallicRoughness.baseColorTexture.texCoord == 1
+    attributes = document.meshes[0].primitives[0].attributes
+    assert attributes.TEXCOORD_1 is not None
+    assert document.accessors[attributes.TEXCOORD_1].count == document.accessors[attributes.TEXCOORD_0].count
+    back = reflets.load_scene(path)
+    assert back.materials["out/s"].base_color_texture.uv == 1

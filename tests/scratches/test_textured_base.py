@@ -31,6 +31,25 @@ def test_scratches_over_a_textured_gltf_base(tmp_path):
     alone = bare.model_copy(update={"materials": {"s": bare.materials["s"].base}})
     np.testing.assert_allclose(image, reflets.render(alone, method="forward"), rtol=1e-5, atol=1e-6)
     assert relmse(image, reflets.reference(bare, spp=4, progress=False).image) < 1e-3  # measured 3e-7
-    scratched = reflets.render(scene(0.02), method="scratches")
+    covered = scene(0.02)  # the reference's finite part: the textured base × its uncovered share, exactly
+    weight = covered.materials["s"].base_weight()
+    finite = reflets.reference(covered, spp=4, progress=False).image
+    np.testing.assert_allclose(finite, weight * reflets.reference(alone, spp=4, progress=False).image, rtol=1e-5,
+                               atol=1e-7)  # fmt: skip
+    assert weight < 0.99
+    scratched = reflets.render(covered, method="scratches")
     untextured = {key: value for key, value in base.items() if key != "base_color_texture"}
     assert relmse(reflets.render(scene(0.02, untextured), method="scratches"), scratched) > 0.1  # measured 0.35
+
+
+def test_a_cut_out_or_blended_glTF_base_is_refused_in_one_line():
+    import pytest
+
+    from reflets.errors import SceneError
+
+    light = {"type": "point", "position": [0, 1, 0], "intensity": [1, 1, 1]}
+    for mode in ("mask", "blend"):
+        with pytest.raises(SceneError, match=f'materials.s: a glTF base must be opaque \\(alpha_mode "{mode}"'):
+            reflets.load_dict({"camera": {"position": [0, 1, 2], "look_at": [0, 0, 0]},
+                               "materials": {"s": {"type": "scratched", "base": {"type": "gltf", "alpha_mode": mode}}},
+                               "mesh": [{"shape": "plane", "material": "s"}], "light": [light]})  # fmt: skip

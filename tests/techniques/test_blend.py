@@ -54,18 +54,32 @@ def test_a_blended_card_and_its_shadow_match_the_reference():
     gpu = reflets.render(scene, method="forward", spp=4)
     ref = reflets.reference(scene, spp=64, progress=False).image
     blocks = lambda image: image.reshape(18, 4, 24, 4, 3).mean(axis=(1, 3))  # noqa: E731
-    assert relmse(blocks(gpu), blocks(ref)) < 0.01  # measured 3e-5
+    assert relmse(blocks(gpu), blocks(ref)) < 1e-3  # measured 3.3e-5
     solid = scene.model_copy(update={"materials": {**scene.materials, "card": scene.materials["card"].model_copy(
         update={"alpha_mode": "opaque"})}})  # fmt: skip
     assert relmse(reflets.render(solid, method="forward", spp=4), gpu) > 0.005  # the blending is seen: 0.019
 
 
 def test_blended_meshes_get_a_pass_of_their_own_after_a_reflecting_pass():
-    scene = reflets.load_dict({
-        "camera": CAMERA,
-        "materials": {"glass": unlit([1, 1, 1, 0.3]), "mirror": {"type": "mirror"}},
-        "mesh": [card("glass", 0.5), {"shape": "sphere", "radius": 0.3, "material": "mirror", "reflector": True}],
-        "light": LIGHT,
-    })  # fmt: skip
-    plan = pass_plan(scene, "ltc")
-    assert plan[-1][2] == frozenset({0})
+    """The blended card is drawn last, and the mirror keeps its reflections (the reflecting pass still draws the
+    emitters and the background: the blended pass does not take them from it)."""
+
+    def scene(card: bool):
+        mesh = [{"shape": "sphere", "radius": 0.5, "material": "mirror", "reflector": True},
+                {"shape": "plane", "size": [4, 4], "material": "floor", "transform": {"translate": [0, -0.5, 0]}}]
+        if card:
+            mesh.append({"shape": "plane", "size": [0.3, 0.3], "material": "glass",
+                         "transform": {"rotate": [90, 0, 0], "translate": [-0.9, 0.2, 0.8]}})
+        return reflets.load_dict({
+            "camera": {"position": [0, 0.5, 3], "look_at": [0, 0, 0], "size": [64, 48]},
+            "materials": {"mirror": {"type": "mirror"}, "floor": {"type": "lambert", "albedo": [0.6, 0.3, 0.2]},
+                          "glass": {"type": "gltf", "base_color": [0.2, 0.4, 1.0, 0.4], "alpha_mode": "blend"}},
+            "mesh": mesh, "light": [{"type": "point", "position": [1, 2, 2], "intensity": [3, 3, 3]}],
+        })  # fmt: skip
+
+    assert pass_plan(scene(True), "ltc")[-1][2] == frozenset({2})
+    with_card, without = reflets.render(scene(True)), reflets.render(scene(False))
+    sphere = np.linalg.norm(reflets.render(scene(False), method="position"), axis=-1) < 0.51
+    # the card's own reflection aside, the mirror shows what it shows without the card (measured 7e-5; 0.004, with
+    # the mirror 10x darker, when the blended pass took the extras from the reflecting one)
+    assert relmse(with_card[sphere][None], without[sphere][None]) < 5e-4

@@ -98,7 +98,9 @@ def pass_plan(scene: Scene, area_method: str) -> list[tuple[str, Scene, frozense
     where that group's depth is equal. The BRDF pass (meshes that leave every light to it, the emitters, the
     background) always runs; passes are ordered by ``Technique.auto_order`` (a pass that reflects the others,
     ``fermat``, last). Blended surfaces (glTF BLEND) are drawn over everything: by the BRDF pass after its
-    background, or — when a pass follows it — by a pass of their own after all the others."""
+    background, or — when a pass follows it — by a pass of their own after all the others (the pass before it
+    draws the extras). A reflector seen through a blended surface shows no reflection there (its G-buffer holds
+    the blended surface)."""
     groups: dict[tuple, set[int]] = {}
     for i, mesh in enumerate(scene.mesh):
         key = tuple(sorted(scene.materials[mesh.material].techniques(mesh).items()))
@@ -198,6 +200,11 @@ class Auto(Technique):
         # meshes, masks, environment and emitters uploaded once for every pass (each pass's scene holds the same
         # meshes and materials, lit by some of the lights)
         self.prepared = PreparedScene(self.ctx, scene, shadow_settings(p))
+        # the emitters and the background: the last pass but a pass of blended meshes only (it draws over them; a
+        # reflecting pass before it does its reflections only as the extras' pass)
+        blended = [bool(meshes) and all(scene.materials[scene.mesh[i].material].blended for i in meshes)
+                   for _, _, meshes, _ in plan]  # fmt: skip
+        extras = max(k for k in range(len(plan)) if not blended[k])
         for k, (method, pass_scene, meshes, additive) in enumerate(plan):
             technique = get_technique(method)(
                 self.ctx,
@@ -207,7 +214,7 @@ class Auto(Technique):
                 environment_occlusion=p.environment_occlusion,
                 texture_anisotropy=p.texture_anisotropy,
             )
-            technique.role = PassRole(meshes=meshes, clear=k == 0, extras=k == len(plan) - 1, additive=additive)
+            technique.role = PassRole(meshes=meshes, clear=k == 0, extras=k == extras, additive=additive)
             technique.shared = self.prepared
             technique.prepare(pass_scene)
             self.passes.append((method, technique))

@@ -29,8 +29,9 @@ def mesh_data(scene: Scene, index: int) -> MeshData:
                 return _MESH_CACHE[key]
     data = _build_mesh_data(scene, index)  # outside the lock: two threads may build the same mesh once each
     if key is not None:
-        for array in (data.positions, data.normals, data.tangents, data.uvs, data.indices):
-            array.flags.writeable = False
+        for array in (data.positions, data.normals, data.tangents, data.uvs, data.indices, data.uvs1):
+            if array is not None:
+                array.flags.writeable = False
         with _MESH_LOCK:
             _MESH_CACHE[key] = data
             while len(_MESH_CACHE) > MESH_CACHE_ENTRIES:

@@ -209,25 +209,22 @@ def _check_files(scene: Scene, source) -> None:
 def _check_uv_sets(scene: Scene) -> None:
     """A texture on the second uv set of a mesh that has one (a procedural shape, an OBJ or PLY file, a glTF
     primitive without TEXCOORD_1) reads the first: one warning line per mesh."""
-    from ..gltf_file import read_gltf
     from ..textures import TextureRef
+    from .geometry import mesh_data
 
     for i, mesh in enumerate(scene.mesh):
         material = scene.materials.get(mesh.material) if mesh.material else None
-        second = [key for key in type(material).model_fields if isinstance(getattr(material, key), TextureRef)
-                  and getattr(material, key).uv == 1] if material is not None else []  # fmt: skip
+        source = getattr(material, "base", material)  # a scratched material's textures are its base's
+        second = [key for key, ref in vars(source).items() if isinstance(ref, TextureRef) and ref.uv == 1] \
+            if source is not None else []  # fmt: skip
         if not second:
             continue
-        has = False
-        if isinstance(mesh, FileMesh) and scene.resolve(mesh.file).suffix.lower() in (".gltf", ".glb"):
-            gltf = read_gltf(scene.resolve(mesh.file))
-            if mesh.part is not None and mesh.part >= len(gltf.instances):
-                continue  # mesh_data's error names the part
-            instances = gltf.instances if mesh.part is None else gltf.instances[mesh.part : mesh.part + 1]
-            has = all(gltf.doc.meshes[k.mesh].primitives[k.primitive].attributes.TEXCOORD_1 is not None
-                      for k in instances)  # fmt: skip
-        if not has:
-            where = f"materials.{mesh.material}.{second[0]}"
+        try:
+            single = mesh_data(scene, i).uvs1 is None  # cached: the renderers read the same object
+        except SceneError:
+            continue  # rendering names what is wrong with the mesh
+        if single:
+            where = f"materials.{mesh.material}.{'base.' if source is not material else ''}{second[0]}"
             _warn([f"mesh[{i}] has one uv set: {where} reads uv set 1, the first is read"])
 
 

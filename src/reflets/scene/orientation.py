@@ -4,6 +4,7 @@ every technique and the references render it alike."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -49,7 +50,7 @@ def apply_orientation(data: MeshData, u: np.ndarray) -> MeshData:
     t = np.where(size > 1e-6, t / np.maximum(size, 1e-300), data.tangents[:, :3])
     t = _consistent_signs(t, data.indices)
     tangents = np.concatenate([t, data.tangents[:, 3:4]], axis=1).astype(np.float32)
-    return MeshData(data.positions, data.normals, tangents, data.uvs, data.indices)
+    return replace(data, tangents=tangents)  # the rest as it is (both uv sets)
 
 
 def _consistent_signs(t: np.ndarray, faces: np.ndarray) -> np.ndarray:

@@ -42,12 +42,23 @@ uniform sampler2D u_mask;  // the light's mask at the quad's (u, v) (nearest tex
 out vec4 f_color;
 
 void main() {
+    vec3 to_eye = v_mirror_point - v_position;
+#if !REFLECTED_EMITTER
+    vec3 n = normalize(v_normal);
+    if (dot(n, to_eye) < 0.0) n = -n;  // two-sided surfaces, as seen from P
+    mat3 frame = shading_frame(n, v_tangent);
+#ifdef MATERIAL_SURFACE
+    // a textured material, as in direct view — before any discard: implicit mip levels and the footprint's normals
+    // need the whole 2x2 quad alive
+    material_surface(vec4(v_uv, v_uv1), frame);
+    material_antialias(n);
+#endif
+#endif
     if (v_valid < 0.9999) discard;  // a vertex without a valid reflection: the whole triangle goes
     vec4 g = texelFetch(u_gbuffer_position, ivec2(gl_FragCoord.xy), 0);
     if (abs(g.w - u_reflector_id) > 0.5) discard;
     if (length(v_mirror_point - u_eye) > length(g.xyz - u_eye) + u_hidden_tolerance) discard;
     if (dot(texelFetch(u_gbuffer_normal, ivec2(gl_FragCoord.xy), 0).xyz, v_position - g.xyz) <= 0.0) discard;
-    vec3 to_eye = v_mirror_point - v_position;
 #if REFLECTED_EMITTER
     bool front = dot(v_normal, to_eye) > 0.0;
     vec3 radiance = u_radiance;
@@ -56,12 +67,7 @@ void main() {
 #endif
     f_color = vec4((front || u_two_sided) ? radiance : vec3(0.0), 1.0);
 #else
-    vec3 n = normalize(v_normal);
-    if (dot(n, to_eye) < 0.0) n = -n;  // two-sided surfaces, as seen from P
-    mat3 frame = shading_frame(n, v_tangent);
 #ifdef MATERIAL_SURFACE
-    material_surface(vec4(v_uv, v_uv1), frame);  // a textured material: its textures, as in direct view
-    material_antialias(n);
     if (!material_covered()) discard;
 #endif
     vec3 wo = transpose(frame) * normalize(to_eye);
