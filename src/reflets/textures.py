@@ -273,17 +273,7 @@ def load_texture(ref: TextureRef, role_srgb: bool) -> TextureData:
         if known is not None and known.key in _DECODED:
             _DECODED.move_to_end(known.key)
             return known
-    if ref.image is not None:
-        from .gltf_file import read_gltf  # an image inside a glTF file
-
-        data = read_gltf(path).image_bytes(ref.image)
-        what = f"{path}: images[{ref.image}]"
-    else:
-        try:
-            data = path.read_bytes()
-        except OSError as exc:
-            raise SceneError(f"cannot read the texture ({exc.strerror or type(exc).__name__})", file=path) from None
-        what = str(path)
+    data, what = texture_bytes(ref)
     decode = lambda: decode_image_bytes(data, what)  # noqa: E731
     decoded = texture_data(decode, data, srgb, ref.wrap, ref.filter == "nearest", ref.channels)
     with _LOCK:
@@ -292,6 +282,20 @@ def load_texture(ref: TextureRef, role_srgb: bool) -> TextureData:
         for key in [k for k, v in _BY_FILE.items() if v.key not in _DECODED]:  # evicted: forget its file too
             del _BY_FILE[key]
     return decoded
+
+
+def texture_bytes(ref: TextureRef) -> tuple[bytes, str]:
+    """The encoded image (PNG, JPEG…) ``ref`` names — a file, or an image inside a glTF file — and how to name it
+    in a message; a SceneError when it cannot be read."""
+    path = Path(ref.texture)
+    if ref.image is not None:
+        from .gltf_file import read_gltf  # an image inside a glTF file
+
+        return read_gltf(path).image_bytes(ref.image), f"{path}: images[{ref.image}]"
+    try:
+        return path.read_bytes(), str(path)
+    except OSError as exc:
+        raise SceneError(f"cannot read the texture ({exc.strerror or type(exc).__name__})", file=path) from None
 
 
 SRGB8_ALPHA8 = 0x8C43

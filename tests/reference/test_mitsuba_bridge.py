@@ -534,11 +534,11 @@ def test_an_orientation_field_is_refused(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("asset, bound", [("TextureCoordinateTest", 0.01), ("DamagedHelmet", 0.01)])
+@pytest.mark.parametrize("asset, bound", [("TextureCoordinateTest", 1.5e-3), ("DamagedHelmet", 5e-3)])
 def test_textured_gltf_assets_through_mitsuba_match_the_numpy_reference(asset, bound):
     """glTF materials as Mitsuba's principled BSDF with bitmap textures (uv transform, filter, wrap), the normal map
     through ``normalmap`` and the emission as an area emitter: the two references agree on 4 × 4 blocks (measured
-    4e-4 and 1.6e-3: the helmet is metal, where Disney's BSDF is Appendix B's; its diffuse differs, below)."""
+    4.3e-4 and 2.0e-3: the helmet is mostly metal, where Disney's BSDF is Appendix B's; its diffuse differs, below)."""
     import reflets
     from reflets.bench.assets import lit_for_comparison
     from reflets.metrics import relmse
@@ -553,25 +553,29 @@ def test_textured_gltf_assets_through_mitsuba_match_the_numpy_reference(asset, b
     assert relmse(blocks(mitsuba), blocks(numpy_ref)) < bound
 
 
-def test_principled_differs_from_appendix_b_by_its_diffuse_only(tmp_path):
-    """Disney's diffuse (Burley's retro-reflection) is brighter than Appendix B's Lambert on rough dielectrics
-    (mean +6 % at roughness 0.5, docs/reference.md); on a metal the two agree within 1 %."""
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "metallic, roughness, low, high",
+    [(0.0, 0.2, 1.01, 1.05), (0.0, 0.5, 1.04, 1.08), (0.0, 0.9, 1.08, 1.14), (1.0, 0.3, 0.985, 1.0)],
+)
+def test_principled_differs_from_appendix_b_by_its_diffuse_only(metallic, roughness, low, high):
+    """Disney's diffuse (Burley's retro-reflection) is brighter than Appendix B's Lambert on rough dielectrics,
+    more so the rougher (mean over the sphere +2.8 %, +6.2 %, +10.8 % at roughness 0.2, 0.5, 0.9: docs/reference.md);
+    a metal agrees within 1 % (0.990)."""
     import reflets
 
-    def mean(metallic):
-        scene = load_dict({
-            "camera": {"position": [0, 0.5, 2.5], "look_at": [0, 0, 0], "size": [48, 36]},
-            "materials": {"m": {"type": "gltf", "base_color": [0.8, 0.5, 0.3, 1], "metallic": metallic,
-                                "roughness": 0.5}},
-            "mesh": [{"shape": "sphere", "radius": 0.7, "material": "m"}],
-            "light": [{"type": "point", "position": [1.5, 2, 2], "intensity": [4, 4, 4]}],
-        })  # fmt: skip
-        seen = np.any(reflets.render(scene, method="position") != 0, axis=-1)
-        mitsuba = render_mitsuba(scene, spp=64)[seen].mean()
-        return mitsuba / reflets.reference(scene, spp=16, progress=False, pixel="box").image[seen].mean()
-
-    assert 1.02 < mean(0.0) < 1.12
-    assert abs(mean(1.0) - 1.0) < 0.01
+    scene = load_dict({
+        "camera": {"position": [0, 0.5, 2.5], "look_at": [0, 0, 0], "size": [96, 72]},
+        "materials": {"m": {"type": "gltf", "base_color": [0.8, 0.5, 0.3, 1], "metallic": metallic,
+                            "roughness": roughness}},
+        "mesh": [{"shape": "sphere", "radius": 0.7, "material": "m"}],
+        "light": [{"type": "point", "position": [1.5, 2, 2], "intensity": [4, 4, 4]},
+                  {"type": "directional", "direction": [1, -0.3, -0.5], "irradiance": [1, 1, 1]}],
+    })  # fmt: skip
+    seen = np.any(reflets.render(scene, method="position") != 0, axis=-1)
+    mitsuba = render_mitsuba(scene, spp=256)[seen].mean()
+    ratio = mitsuba / reflets.reference(scene, spp=64, progress=False, pixel="box").image[seen].mean()
+    assert low < ratio < high, ratio
 
 
 def test_gltf_features_principled_cannot_express_are_refused_in_one_line(tmp_path):

@@ -281,14 +281,16 @@ def _bitmap(ref, values: np.ndarray, name: str) -> dict[str, Any]:
             "to_uv": _transform(matrix)}  # fmt: skip
 
 
-def material_emitter(material) -> dict[str, Any] | None:
-    """The ``area`` emitter of a glTF material's emission (× its texture), or None."""
-    if getattr(material, "type", "") != "gltf" or material.unlit:
+def material_emitter(name: str, material) -> dict[str, Any] | None:
+    """The ``area`` emitter of a glTF material's emission (× its texture), or None. Mitsuba's area emitters emit
+    on the front side only, where reflets' renderers emit on both: an open emissive surface seen from behind
+    differs (closed meshes do not)."""
+    if getattr(material, "type", "") != "gltf":  # (an unlit one is refused with its BSDF)
         return None
     emitted = np.asarray(material.emissive, np.float64) * material.emissive_strength
     if not np.any(emitted > 0):
         return None
-    return {"type": "area", "radiance": _gltf_map(material, "emissive_texture", emitted, slice(0, 3), "emission")}
+    return {"type": "area", "radiance": _gltf_map(material, "emissive_texture", emitted, slice(0, 3), name)}
 
 
 def _area_emitter(radiance, texture: Path | None = None) -> dict[str, Any]:
@@ -463,6 +465,7 @@ def to_mitsuba_dict(
     bsdfs = {
         name: material_to_mitsuba(name, scene.materials[name]) for name in sorted({m.material for m in scene.mesh})
     }
+    emitters = {name: material_emitter(name, scene.materials[name]) for name in bsdfs}
     for i, light in enumerate(scene.light):  # before anything is written
         if not getattr(light, "shadows", True):
             raise SceneError(
@@ -479,9 +482,8 @@ def to_mitsuba_dict(
         positions.append(data.positions.astype(np.float64))
         path = write_ply(workdir / f"mesh_{i}.ply", data.positions, data.indices, data.normals, data.uvs)
         out[f"mesh_{i}"] = {"type": "ply", "filename": str(path), "face_normals": False, "bsdf": bsdfs[mesh.material]}
-        emitter = material_emitter(scene.materials[mesh.material])
-        if emitter is not None:
-            out[f"mesh_{i}"]["emitter"] = emitter
+        if emitters[mesh.material] is not None:
+            out[f"mesh_{i}"]["emitter"] = emitters[mesh.material]
 
     for i, light in enumerate(scene.light):
         if isinstance(light, PointLight) and light.spot is not None:

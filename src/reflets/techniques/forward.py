@@ -522,7 +522,7 @@ class Forward(Technique):
         if role.extras:
             self._draw_extras(vp_bytes, view_proj, radiance and color is None)
         if self._blended:
-            self._draw_blended(target, eye, per_frame, frame, seed)
+            self._draw_blended(eye, per_frame, frame, seed)
         ctx.disable(ctx.DEPTH_TEST)
 
     def _draw_mesh(self, draw: MeshDraw, per_frame: dict, frame: int, seed: int) -> None:
@@ -537,22 +537,17 @@ class Forward(Technique):
         set_uniforms(draw.program, {**draw.uniforms, **samplers, **per_frame, **shading_frame})
         draw.vao.render()
 
-    def _draw_blended(self, target, eye, per_frame: dict, frame: int, seed: int) -> None:
+    def _draw_blended(self, eye, per_frame: dict, frame: int, seed: int) -> None:
         """glTF BLEND surfaces over everything drawn (the background included), farthest first by their bounding
-        boxes' centres (a mesh's own triangles unsorted, as three.js and Filament draw them); their depths are
-        written, as three.js does, so that a later pass (Fermat's reflectors) stays behind them."""
-        ctx = self.ctx
+        boxes' centres (a mesh's own triangles unsorted, as three.js and Filament draw them), their depths written
+        as three.js does."""
+        ctx = self.ctx  # never an additive pass: a blended (glTF) material's meshes are the BRDF pass's
         ctx.enable(ctx.BLEND)
-        if self.role.additive:  # more lights on surfaces already blended: add their weighted radiance
-            ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE, moderngl.ZERO, moderngl.ONE
-            ctx.depth_func, target.fbo.depth_mask = depth.NEARER_OR_EQUAL, False
-        else:  # a L + (1 - a) L_behind; the target's alpha kept
-            ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE
+        ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE  # a L + (1-a) L
         distance = {k: float(np.linalg.norm(self._shaded[k].centre - eye)) for k in self._blended}
         for k in sorted(self._blended, key=distance.get, reverse=True):
             self._draw_mesh(self._shaded[k], per_frame, frame, seed)
         ctx.disable(ctx.BLEND)
-        ctx.depth_func, target.fbo.depth_mask = depth.NEARER, True
 
     def _draw_extras(self, vp_bytes: bytes, view_proj: np.ndarray, background: bool) -> None:
         """The area lights' emitting faces and the environment behind everything."""
