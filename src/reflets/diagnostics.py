@@ -31,6 +31,7 @@ AOV_METHODS = ("position", "normal", "uv")
 
 def scene_warnings(scene: Scene, method: str) -> list[str]:
     """One line per part of ``scene`` that ``method`` leaves unlit or ignores."""
+    from .renderer.compose import CONSTANT_MATERIAL_METHODS
     from .scene.geometry import mesh_data
 
     if method in AOV_METHODS:
@@ -62,7 +63,7 @@ def scene_warnings(scene: Scene, method: str) -> list[str]:
         else:  # drawn by its own technique: what that cannot light
             lights = {light.type for light in scene.light}
             messages += [f"materials.{name}: {text}" for text in material.lighting_warnings(lights)]
-        if method in ("ltc", "analytic", "biased") and not material.tabulated and _has_area_light(scene):
+        if method in CONSTANT_MATERIAL_METHODS and not material.tabulated and _has_area_light(scene):
             kind, what = ("textured", "textures are") if material.textured else ("anisotropic", "anisotropy is")
             messages.append(
                 f"materials.{name}: method '{method}' lights this {kind} material by its constant factors and an "

@@ -9,8 +9,8 @@ Both renderers read the same decoded texels:
 - the GPU gets ``SRGB8_ALPHA8`` for colour (the sampler linearises before filtering), float16 for normal maps
   (8-bit mips and filtering would tilt a normal by up to 1/255 and blur the Toksvig lengths) and 8-bit codes for
   other data (roughness, metalness, occlusion: their files' own precision; float16 cost the helmet 7 % of its
-  frame on llvmpipe, measured with ``reflets bench assets``), with a full mip chain built here in
-  linear float (a box filter; the driver's own mipmap generation is not guaranteed gamma-correct for sRGB
+  frame on llvmpipe, measured by hand with ``reflets bench assets`` before the change), with a full mip chain built
+  here in linear float (a box filter; the driver's own mipmap generation is not guaranteed gamma-correct for sRGB
   formats), trilinear and 16× anisotropic filtering, and
   the wrap modes of the file's sampler; one texture per content and role, shared by every object and renderer
   of a GL context (``texture_for``);

@@ -30,8 +30,8 @@ KHR_materials_sheen lays a fabric's back-scattering sheen over the base (under t
     f_sheened = C · D_s V_s + f · min(1 − max(C) E(n·v), 1 − max(C) E(n·l))
 
 with C = ``sheen_color`` (× RGB of ``sheen_color_texture``, sRGB), D_s the "Charlie" distribution (Conty Estevez &
-Kulla 2017) of α_s = ``sheen_roughness``² (× A of ``sheen_roughness_texture``; roughness at least 0.07, as Khronos'
-sample viewer and three.js clamp it), V_s its fitted Smith visibility (the extension's "Charlie" λ, not Ashikhmin's
+Kulla 2017) of α_s = ``sheen_roughness``² (× A of ``sheen_roughness_texture``; roughness at least 0.07, as three.js
+clamps it), V_s its fitted Smith visibility (the extension's "Charlie" λ, not Ashikhmin's
 approximation), no Fresnel, and E(μ) the sheen lobe's directional albedo (the fourth channel of the split-sum
 table, :func:`ibl_table`; both renderers interpolate the same table) — the albedo-scaling layering in its
 reciprocal form. A limit of the extension's formulas: with its λ, E exceeds 1 at grazing angles for smooth
@@ -92,8 +92,8 @@ SLOTS = (
     ("specular_color_texture", "m_specular_color_map", True, "BRDF_GLTF_SPECULAR_COLOR_MAP"),
     ("anisotropy_texture", "m_anisotropy_map", False, "BRDF_GLTF_ANISOTROPY_MAP"),
 )
-#: the smallest sheen roughness rendered (Khronos' sample viewer and three.js clamp it there: below, the Charlie
-#: lobe is a needle at grazing half vectors)
+#: the smallest sheen roughness rendered (three.js clamps it there: below, the Charlie lobe is a needle at grazing
+#: half vectors)
 MIN_SHEEN_ROUGHNESS = 0.07
 #: the clear coat's Fresnel reflectance at normal incidence (η = 1.5)
 COAT_F0 = 0.04
@@ -499,8 +499,7 @@ class Gltf(Material):
         parameters); ``frames`` (geometric, shading) place the clear coat's normal (without them: the shading
         normal)."""
         n = len(uv)
-        points = self.constant_points((n,))
-        base = np.array(points.base)
+        base = np.tile(np.asarray(self.base_color[:3], np.float64), (n, 1))
         texels = self._lookup("base_color_texture", uv)
         if texels is not None:
             base = base * texels[:, :3]
