@@ -29,9 +29,13 @@ WITHOUT = {
 AOV_METHODS = ("position", "normal", "uv")
 
 
+#: area-light methods whose integrals read a material's constant parameters (tables, lobe summaries), not the
+#: per-fragment ones its textures give: ``auto`` takes ``forward``'s midpoint rule for textured materials instead
+CONSTANT_MATERIAL_METHODS = ("ltc", "analytic", "biased")
+
+
 def scene_warnings(scene: Scene, method: str) -> list[str]:
     """One line per part of ``scene`` that ``method`` leaves unlit or ignores."""
-    from .renderer.compose import CONSTANT_MATERIAL_METHODS
     from .scene.geometry import mesh_data
 
     if method in AOV_METHODS:

@@ -38,6 +38,7 @@ from typing import ClassVar, Literal
 import numpy as np
 from pydantic import Field
 
+from ..diagnostics import CONSTANT_MATERIAL_METHODS
 from ..gpu import FrameTimer
 from ..scene.model import PolygonLight, QuadLight, Scene
 from ..techniques.base import Technique, TechniqueParams, add_frame, get_technique, register_technique
@@ -55,9 +56,6 @@ from ..techniques.forward import (
 from ..techniques.prepared import PreparedScene
 from ..techniques.shadows import CASCADES
 
-#: area-light methods whose integrals read a material's constant parameters (tables, lobe summaries), not the
-#: per-fragment ones its textures give: ``auto`` takes ``forward``'s midpoint rule for textured materials instead
-CONSTANT_MATERIAL_METHODS = ("ltc", "analytic", "biased")
 #: the method of a scene that names none
 DEFAULT_METHOD = "auto"
 AREA_METHODS = ("ltc", "forward", "brute", "adaptive", "biased", "analytic", "mc")
