@@ -30,8 +30,19 @@ AOV_METHODS = ("position", "normal", "uv")
 
 
 #: area-light methods whose integrals read a material's constant parameters (tables, lobe summaries), not the
-#: per-fragment ones its textures give: ``auto`` takes ``forward``'s midpoint rule for textured materials instead
+#: per-fragment ones its textures give — ``ltc`` save for materials it reads per fragment (``fragment_ltc``):
+#: ``auto`` takes ``forward``'s midpoint rule for the others
 CONSTANT_MATERIAL_METHODS = ("ltc", "analytic", "biased")
+
+
+def lit_by_constants(method: str, material) -> bool:
+    """Whether ``method`` lights ``material`` under quad / polygon lights by its constant factors and an isotropic
+    lobe, its textures or anisotropy ignored there."""
+    if method not in CONSTANT_MATERIAL_METHODS or material.tabulated:
+        return False
+    if method == "ltc" and material.fragment_ltc:  # textures read per fragment; the lobe isotropic
+        return getattr(material, "anisotropic", False)
+    return True
 
 
 def scene_warnings(scene: Scene, method: str) -> list[str]:
@@ -67,13 +78,19 @@ def scene_warnings(scene: Scene, method: str) -> list[str]:
         else:  # drawn by its own technique: what that cannot light
             lights = {light.type for light in scene.light}
             messages += [f"materials.{name}: {text}" for text in material.lighting_warnings(lights)]
-        if method in CONSTANT_MATERIAL_METHODS and not material.tabulated and _has_area_light(scene):
-            kind, what = ("textured", "textures are") if material.textured else ("anisotropic", "anisotropy is")
-            messages.append(
-                f"materials.{name}: method '{method}' lights this {kind} material by its constant factors and an "
-                f"isotropic lobe under quad / polygon lights (its {what} ignored there; auto or forward use "
-                f"{'them' if material.textured else 'it'})"
-            )
+        if lit_by_constants(method, material) and _has_area_light(scene):
+            if method == "ltc" and material.fragment_ltc:  # it reads textures per fragment, not an anisotropic lobe
+                messages.append(
+                    f"materials.{name}: method 'ltc' lights this anisotropic material by an isotropic lobe of the same "
+                    f"area under quad / polygon lights (its anisotropy is ignored there; auto or forward use it)"
+                )
+            else:
+                kind, what = ("textured", "textures are") if material.textured else ("anisotropic", "anisotropy is")
+                messages.append(
+                    f"materials.{name}: method '{method}' lights this {kind} material by its constant factors and an "
+                    f"isotropic lobe under quad / polygon lights (its {what} ignored there; auto or forward use "
+                    f"{'them' if material.textured else 'it'})"
+                )
         if method == "analytic" and _has_glossy_part(material) and _has_area_light(scene):
             messages.append(
                 f"materials.{name}: method 'analytic' integrates only Lambertian parts under quad / polygon lights; "

@@ -262,9 +262,10 @@ def test_cli_renders_a_gltf_file_with_no_other_argument(tmp_path, monkeypatch, c
     assert not (tmp_path / "b.png").exists()
 
 
-def test_textured_materials_take_the_midpoint_rule_under_area_lights_in_auto(ctx):
-    """LTC's tables read a material's constant factors: auto lights textured materials by forward's midpoint rule,
-    and an explicit --method ltc says it ignores the textures."""
+def test_textured_materials_take_ltc_per_fragment_under_area_lights_in_auto(ctx):
+    """LTC reads a textured glTF material per fragment: auto keeps it; the analytic and biased methods' integrals
+    read constant factors (an explicit --method says it ignores the textures), and an anisotropic lobe (isotropic
+    in LTC) takes forward's midpoint rule."""
     from reflets.diagnostics import scene_warnings
     from reflets.renderer.compose import Auto
     from reflets.scene.model import QuadLight
@@ -272,8 +273,13 @@ def test_textured_materials_take_the_midpoint_rule_under_area_lights_in_auto(ctx
     scene, _ = load(ASSETS / "TextureCoordinateTest" / "TextureCoordinateTest.glb")
     quad = QuadLight(type="quad", corners=((-1, 2, -1), (1, 2, -1), (-1, 2, 1)), radiance=(5, 5, 5), two_sided=True)
     scene = scene.model_copy(update={"light": [quad]})
-    assert Auto(ctx)._area_method(scene) == "forward"
-    assert any("textures are ignored" in line for line in scene_warnings(scene, "ltc"))
+    assert Auto(ctx)._area_method(scene) == "ltc"
+    assert not any("ignored" in line for line in scene_warnings(scene, "ltc"))
+    assert any("textures are ignored" in line for line in scene_warnings(scene, "biased"))
+    brushed = {k: m.model_copy(update={"anisotropy_strength": 0.5}) for k, m in scene.materials.items()}
+    brushed_scene = scene.model_copy(update={"materials": brushed})
+    assert Auto(ctx)._area_method(brushed_scene) == "forward"
+    assert any("anisotropy is ignored" in line for line in scene_warnings(brushed_scene, "ltc"))
 
 
 def test_gltf_with_a_material_is_one_mesh_read_by_reflets_reader(tmp_path):

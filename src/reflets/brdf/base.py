@@ -146,6 +146,12 @@ class Material(BaseModel):
         return True
 
     @property
+    def fragment_ltc(self) -> bool:
+        """The ``ltc`` method reads this material per fragment (its GLSL twin's ``material_ibl``: textures, the GGX
+        lobe at each fragment's roughness) instead of integrating its constant factors (``tabulated``)."""
+        return False
+
+    @property
     def blended(self) -> bool:
         """Drawn over what lies behind it by its coverage (glTF's alphaMode BLEND): after the opaque surfaces."""
         return False

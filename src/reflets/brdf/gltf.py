@@ -406,6 +406,14 @@ class Gltf(Material):
     def tabulated(self) -> bool:
         return not (self.textured or self.anisotropic)
 
+    @property
+    def fragment_ltc(self) -> bool:
+        """Textured or not, save a constant sheen, which the one-material table fits better than the per-fragment
+        path's Lambertian stand-in for it (a sphere under two quad lights against the reference: 0.06 % against
+        0.73 %; docs/assets.md). An anisotropic lobe is read as the isotropic one of the same area (as by the split
+        sum), so ``auto`` lights it by ``forward``."""
+        return self.textured or not self.sheened
+
     def _anisotropy(self, direction: np.ndarray, strength: np.ndarray) -> np.ndarray:
         """(…, 3): the direction turned by ``anisotropy_rotation`` and made unit ((1, 0) where it is zero), s²."""
         c, s = np.cos(self.anisotropy_rotation), np.sin(self.anisotropy_rotation)

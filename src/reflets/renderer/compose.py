@@ -38,7 +38,7 @@ from typing import ClassVar, Literal
 import numpy as np
 from pydantic import Field
 
-from ..diagnostics import CONSTANT_MATERIAL_METHODS
+from ..diagnostics import lit_by_constants
 from ..gpu import FrameTimer
 from ..scene.model import PolygonLight, QuadLight, Scene
 from ..techniques.base import Technique, TechniqueParams, add_frame, get_technique, register_technique
@@ -228,8 +228,8 @@ class Auto(Technique):
         masked = any(getattr(light, "mask", None) is not None for light in scene.light)
         if masked and method != "forward" and not getattr(get_technique(method), "supports_masks", False):
             return "forward"
-        if method in CONSTANT_MATERIAL_METHODS and not all(m.tabulated for m in scene.materials.values()):
-            return "forward"  # its integrals take a material's constant parameters and fitted lobe, not textures
+        if any(lit_by_constants(method, m) for m in scene.materials.values()):
+            return "forward"  # its integrals would take a material's constant parameters, not its textures
         return method
 
     @property

@@ -11,7 +11,10 @@
 // scene has that many vertices, so the edge loops have a constant trip count and unroll), LTC_POWER (the
 // table's base: 1 the clamped cosine; odd n > 1 the mixture (1 − β) clamped cosine + β cosⁿ, β per cell in the
 // magnitude texture's alpha, whose polygon integral adds (n − 1)/2 recurrence steps per edge), LTC_CUT (with a
-// mixture: the cosine of the cone outside which the cosⁿ lobe is cut off, see ltc_polygon_integral).
+// mixture: the cosine of the cone outside which the cosⁿ lobe is cut off, see ltc_polygon_integral),
+// LTC_FRAGMENT (1: the material gives its parameters per fragment — a textured glTF material, through
+// material_ibl — and the GGX family table is read at each fragment's roughness; LTC_SQRT_ALPHA_MIN: the
+// table's √α_min, for the roughness coordinate).
 
 // LTC_PROFILE (cost breakdown only; the images are wrong): 0 everything; otherwise drop one stage to time it.
 // (macros, not constants: an undefined name in #if silently reads 0)
@@ -194,7 +197,57 @@ mat3 g_ltc_transform;
 vec3 g_ltc_lobe;
 float g_ltc_weight;  // the mixture weight β of cosⁿ (0 for a clamped-cosine table)
 
+// The polygon transform of a lobe about frame's normal at view wo (local to frame), table cell m = the four
+// entries of M⁻¹: rows of (rotation about the normal bringing wo into the xz plane) · transpose(frame), in world
+// space, times M⁻¹ = [[1, 0, m02], [0, m11, 0], [m20, 0, m22]] (rows).
+mat3 ltc_transform(mat3 frame, vec3 wo, vec4 m) {
+    float len2 = dot(wo.xy, wo.xy);
+    vec2 c = len2 > 1e-14 ? wo.xy * inversesqrt(len2) : vec2(1.0, 0.0);
+    vec3 r0 = c.x * frame[0] + c.y * frame[1];
+    vec3 r1 = c.x * frame[1] - c.y * frame[0];
+    vec3 n = frame[2];
+    return transpose(mat3(r0 + m.x * n, m.y * r1, m.z * r0 + m.w * n));
+}
+
+#if LTC_FRAGMENT
+// The material's parameters at this fragment (material_ibl, the split sum's hook: its textures read by
+// material_surface): the Lambertian part's albedo — the dielectric's Fresnel-weighted diffuse lobe and a sheen
+// as a Lambertian lobe of the sheen's albedo, their hemispherical averages at this view — and the GGX lobe's
+// exact directional albedo (height-correlated Smith, Schlick: F0 A + B) over the family table's shape (the
+// separable-Smith GGX fit) at the fragment's alpha; a clear coat as a second lobe about its own normal.
+vec3 g_ltc_diffuse;
+float ltc_roughness(float alpha) {
+    return (sqrt(clamp(alpha, LTC_SQRT_ALPHA_MIN * LTC_SQRT_ALPHA_MIN, 1.0)) - LTC_SQRT_ALPHA_MIN) / (1.0 - LTC_SQRT_ALPHA_MIN);
+}
+#ifdef MATERIAL_COAT
+mat3 g_ltc_coat_transform;
+float g_ltc_coat_lobe;    // the coat's weight c F_c(v) × its lobe's albedo
+float g_ltc_base_weight;  // 1 − c F_c(v): what the coat leaves of the base
+#endif
+#endif
+
 void ltc_setup(mat3 frame, vec3 wo) {
+#if LTC_FRAGMENT
+    vec3 specular_albedo;
+    float alpha;
+    material_ibl(wo.z, g_ltc_diffuse, specular_albedo, alpha);
+    vec2 uv = ltc_lookup(wo.z, ltc_roughness(alpha));
+    vec4 m = texture(a_ltc_minv, uv);
+    g_ltc_lobe = specular_albedo;
+    g_ltc_weight = 0.0;
+#ifdef MATERIAL_COAT
+    float coat_weight, coat_alpha, coat_albedo;
+    vec3 coat_n, v = frame * wo;
+    material_coat_ibl(frame, v, coat_weight, coat_n, coat_alpha, coat_albedo);
+    vec3 coat_t = frame[0] - coat_n * dot(coat_n, frame[0]);
+    coat_t = dot(coat_t, coat_t) > 1e-12 ? normalize(coat_t) : frame[1];
+    mat3 coat_frame = mat3(coat_t, cross(coat_n, coat_t), coat_n);
+    vec3 coat_wo = v * coat_frame;  // transpose(coat_frame) * v
+    g_ltc_coat_transform = ltc_transform(coat_frame, coat_wo, texture(a_ltc_minv, ltc_lookup(coat_wo.z, ltc_roughness(coat_alpha))));
+    g_ltc_coat_lobe = coat_weight * coat_albedo;
+    g_ltc_base_weight = 1.0 - coat_weight;
+#endif
+#else
     vec2 uv = ltc_lookup(wo.z, a_ltc_roughness);
 #if LTC_PROFILE == LTC_PROFILE_NO_FETCH
     vec4 m = vec4(0.0, 1.0, 0.0, 1.0) + uv.xyxy * 1e-3;  // keeps the lookup's arithmetic alive
@@ -206,14 +259,8 @@ void ltc_setup(mat3 frame, vec3 wo) {
     g_ltc_lobe = magnitude.rgb * a_ltc_scale;
     g_ltc_weight = magnitude.a;
 #endif
-    float len2 = dot(wo.xy, wo.xy);
-    vec2 c = len2 > 1e-14 ? wo.xy * inversesqrt(len2) : vec2(1.0, 0.0);
-    // rows of (rotation about the normal bringing wo into the xz plane) · transpose(frame), in world space
-    vec3 r0 = c.x * frame[0] + c.y * frame[1];
-    vec3 r1 = c.x * frame[1] - c.y * frame[0];
-    vec3 n = frame[2];
-    // times M⁻¹ = [[1, 0, m02], [0, m11, 0], [m20, 0, m22]] (rows)
-    g_ltc_transform = transpose(mat3(r0 + m.x * n, m.y * r1, m.z * r0 + m.w * n));
+#endif
+    g_ltc_transform = ltc_transform(frame, wo, m);
     g_ltc_ready = true;
 }
 
@@ -232,6 +279,14 @@ vec3 area_light_contribution(int i, vec3 x, mat3 frame, vec3 wo) {
     int n = int(corner.w + 0.5);
 #endif
     vec3 sum = vec3(0.0);
+#if LTC_FRAGMENT
+    if (!g_ltc_ready) ltc_setup(frame, wo);
+    sum += g_ltc_diffuse * ltc_polygon_integral(i, n, transpose(frame), x, false, 0.0);
+    sum += g_ltc_lobe * ltc_polygon_integral(i, n, g_ltc_transform, x, false, 0.0);
+#ifdef MATERIAL_COAT
+    sum = g_ltc_base_weight * sum + g_ltc_coat_lobe * ltc_polygon_integral(i, n, g_ltc_coat_transform, x, false, 0.0);
+#endif
+#else
 #if LTC_DIFFUSE
     sum += a_ltc_diffuse * ltc_polygon_integral(i, n, transpose(frame), x, false, 0.0);
 #endif
@@ -243,5 +298,6 @@ vec3 area_light_contribution(int i, vec3 x, mat3 frame, vec3 wo) {
     sum += g_ltc_lobe * ltc_polygon_integral(i, n, g_ltc_transform, x, LTC_POWER > 1, g_ltc_weight);
 #endif
 #endif
+#endif  // LTC_FRAGMENT
     return sum * head.rgb;
 }
