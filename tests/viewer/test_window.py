@@ -133,3 +133,52 @@ def test_a_script_with_a_bad_event_is_refused_before_the_scene_changes(tmp_path)
     assert done.returncode == 2
     assert "unknown event type 'teleport'" in done.stderr and "Traceback" not in done.stderr
     assert not Path(saved).exists()
+
+
+PANEL_SCRIPT = """
+import sys
+import numpy as np
+from PIL import Image
+import reflets
+from reflets.viewer.window import ViewerWindow
+
+Image.fromarray(np.full((16, 16, 4), (255, 0, 255, 255), np.uint8)).save(sys.argv[1] + "/magenta.png")
+scene = reflets.load_dict({
+    "camera": {"position": [0, 0, 3], "look_at": [0, 0, 6], "size": [640, 480]},  # looking away from the mesh
+    "materials": {"card": {"type": "gltf", "base_color": [1, 1, 1, 0.5], "metallic": 0.0,
+                           "base_color_texture": {"texture": sys.argv[1] + "/magenta.png"}}},
+    "mesh": [{"shape": "plane", "size": [1, 1], "material": "card"}],
+    "light": [{"type": "point", "position": [0, 2, 0], "intensity": [1, 1, 1]}],
+})
+window = ViewerWindow(scene, size=(640, 480))
+counts = []
+for select in (False, True):
+    if select:
+        window.controller.handle({"type": "select", "mesh": 0})
+    for _ in range(3):  # the panels settle
+        window.draw()
+        window.draw_panels()
+        window.wnd.swap_buffers()
+    window.draw()
+    window.draw_panels()
+    pixels = np.frombuffer(window.wnd.fbo.read(components=3), np.uint8).reshape(480, 640, 3)
+    counts.append(int(np.sum(np.all(pixels == (255, 0, 255), axis=-1))))
+print("magenta", *counts, len(window.panels._thumbnails))
+window.close()
+"""
+
+
+@pytest.mark.slow
+def test_the_selection_panel_shows_a_gltf_material_s_textures(tmp_path):
+    """A selected mesh's glTF textures are pictured in the Selection panel (the view itself looks away: the
+    magenta pixels are the picture's, 16 x 16 texels shown at their size)."""
+    script = tmp_path / "panel.py"
+    script.write_text(PANEL_SCRIPT, "utf-8")
+    xvfb = shutil.which("xvfb-run")
+    if xvfb is None:
+        pytest.fail("xvfb-run is missing: `make test` installs it (tools/install-system-packages)")
+    done = subprocess.run([xvfb, "-a", "-s", "-screen 0 1024x768x24", sys.executable, str(script), str(tmp_path)],
+                          capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    before, after, pictures = (int(k) for k in done.stdout.split()[-3:])
+    assert before == 0 and after >= 16 * 16 and pictures == 1

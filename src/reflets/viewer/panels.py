@@ -8,10 +8,13 @@ a controller event, so what a panel does is what a script replays. Edits are sen
   relative MSE against it;
 - Selection (a click in the view selects): a mesh's material parameters and transform (and, for an anisotropic
   material, highlight painting: tool, brush radius, undo / redo, save the field), a light's position (or
-  corners), power and shadows.
+  corners), power and shadows. A glTF material's factors are edited like any parameter (its RGBA base colour as
+  a colour); each of its textures is shown — a picture of the image as stored, its file, uv set and encoding.
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import moderngl
 import numpy as np
@@ -46,7 +49,24 @@ COLOURS = {
     "rd",
     "rs",
     "reflectance",
+    "emissive",
+    "sheen_color",
+    "specular_color",
 }
+#: four-component fields edited as colours with alpha (glTF's base colour: alpha is coverage, in [0, 1])
+COLOURS_ALPHA = {"base_color"}
+#: the larger side of a texture's picture in the Selection panel, in pixels
+THUMBNAIL = 96
+
+
+def thumbnail(codes: np.ndarray, side: int = THUMBNAIL) -> np.ndarray:
+    """A texture's picture for the panel: its stored codes (H, W, 4 uint8, row 0 at the top) subsampled to at most
+    ``side`` pixels a side, made opaque (a cut-out's holes would hide the colours)."""
+    h, w = codes.shape[:2]
+    step = max(1, -(-max(h, w) // side))
+    picture = np.array(codes[::step, ::step], np.uint8)
+    picture[..., 3] = 255
+    return np.ascontiguousarray(picture)
 
 
 class Panels:
@@ -63,6 +83,7 @@ class Panels:
         self.visible = True
         self.spp = 64
         self._pending: dict[str, object] = {}  # widget id → value being dragged
+        self._thumbnails: dict[str, moderngl.Texture] = {}  # texture content key → its picture, registered
         self._events: list[dict] = []
         self.saves: list[str] = []  # "screenshot" / "scene" / "camera" asked for this frame
 
@@ -94,6 +115,9 @@ class Panels:
         return self._events
 
     def release(self) -> None:
+        for texture in self._thumbnails.values():
+            texture.release()
+        self._thumbnails = {}
         self.renderer.shutdown()
         self.imgui.destroy_context()
 
@@ -156,9 +180,12 @@ class Panels:
 
     def _selection(self, c) -> None:
         imgui = self.imgui
-        imgui.set_next_window_pos(imgui.ImVec2(c.size[0] - 288, 8), imgui.Cond_.first_use_ever)
-        imgui.set_next_window_size(imgui.ImVec2(280, 0), imgui.Cond_.first_use_ever)
-        imgui.begin("Selection")
+        # kept at the view's right edge, fitted to what is selected (later selections grow it), within the view's
+        # height (then it scrolls)
+        imgui.set_next_window_pos(imgui.ImVec2(c.size[0] - 8, 8), imgui.Cond_.always, imgui.ImVec2(1.0, 0.0))
+        imgui.set_next_window_size_constraints(imgui.ImVec2(280, 0), imgui.ImVec2(c.size[0], c.size[1] - 16))
+        imgui.begin("Selection", None, imgui.WindowFlags_.always_auto_resize)
+        imgui.push_item_width(150)  # what the window's width is fitted to
         imgui.text(c.selection_label())
         for index in range(len(c.scene.light)):  # lights without a surface to click
             if index:
@@ -171,7 +198,11 @@ class Panels:
                 name = c.scene.mesh[index].material
                 imgui.separator()
                 imgui.text(f"material '{name}'")
-                for field, value in c.scene.materials[name].model_dump(exclude_none=True).items():
+                material = c.scene.materials[name]
+                for field, value in material.model_dump(exclude_none=True).items():
+                    if isinstance(value, dict) and "texture" in value:  # a texture slot (glTF)
+                        self._texture(field, value, material.texture_data(field))
+                        continue
                     self._field(f"m.{name}.{field}", field, value,
                                 lambda f, v, n=name: {"type": "material", "name": n, "fields": {f: v}})  # fmt: skip
                 if "orientation" in type(c.scene.materials[name]).model_fields:
@@ -185,6 +216,7 @@ class Panels:
                 for field, value in c.scene.light[index].model_dump(exclude_none=True).items():
                     self._field(f"l.{index}.{field}", field, value,
                                 lambda f, v, i=index: {"type": "light", "index": i, "fields": {f: v}})  # fmt: skip
+        imgui.pop_item_width()
         imgui.end()
 
     def _paint_widgets(self, c) -> None:
@@ -231,6 +263,21 @@ class Panels:
             draw.add_text(imgui.ImVec2(x + 8, y - 8), colour, f"light[{index}]")
 
     # ------------------------------------------------------------------ widgets
+    def _texture(self, field: str, ref: dict, data) -> None:
+        """A texture slot: its picture (made once per image content), file, uv set and encoding."""
+        imgui = self.imgui
+        where = Path(ref["texture"]).name + (f" image {ref['image']}" if ref.get("image") is not None else "")
+        encoding = "sRGB" if data.srgb else "linear"
+        imgui.text(f"{field}: {where}")
+        imgui.text(f"  uv set {ref.get('uv', 0)}, {encoding}, {data.size[0]} x {data.size[1]}")
+        picture = self._thumbnails.get(data.key)
+        if picture is None:
+            codes = thumbnail(data.codes)
+            picture = self.renderer.ctx.texture((codes.shape[1], codes.shape[0]), 4, codes.tobytes())
+            self.renderer.register_texture(picture)
+            self._thumbnails[data.key] = picture
+        imgui.image(picture.glo, imgui.ImVec2(*picture.size))
+
     def _choice(self, label: str, current: str, options: tuple[str, ...], event) -> None:
         items = list(options) if current in options else [current, *options]
         changed, k = self.imgui.combo(label, items.index(current), items)
@@ -252,6 +299,8 @@ class Panels:
             _, new = imgui.drag_int(label, int(shown), 1.0)
         elif isinstance(value, float):
             _, new = imgui.drag_float(label, float(shown), max(abs(value), 0.01) * 0.005, 0.0, 0.0, "%.4g")
+        elif field in COLOURS_ALPHA and isinstance(value, list | tuple) and len(value) == 4:
+            _, new = imgui.color_edit4(label, list(shown), imgui.ColorEditFlags_.float)
         elif _is_vec3(value):
             if field in COLOURS:
                 _, new = imgui.color_edit3(label, list(shown), imgui.ColorEditFlags_.hdr | imgui.ColorEditFlags_.float)
