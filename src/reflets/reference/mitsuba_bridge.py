@@ -10,7 +10,9 @@ directly comparable with the GPU images.
 Conventions (each checked by ``tests/reference/test_mitsuba_bridge.py``):
 
 * **Camera.** ``perspective`` sensor, ``fov = fov_y`` on ``fov_axis = "y"``, ``to_world`` = Mitsuba's
-  look-at (local +z forward, +x left, +y up) built from ``position``, ``look_at`` and ``up``. Row 0 of the
+  look-at (local +z forward, +x left, +y up) built from ``position``, ``look_at`` and ``up``; an orthographic
+  camera as the ``orthographic`` sensor, its look-at scaled in x and y by ``ortho_height`` × aspect / 2 (Mitsuba's
+  window is [−1, 1] × [−1/aspect, 1/aspect]). Row 0 of the
   image is the top; a world point lands on the pixel :func:`reflets.scene.camera.project` gives.
 * **Pixels.** ``hdrfilm`` with a ``box`` reconstruction filter: each pixel is the mean radiance over the
   pixel's square (uniform jitter), not the value at its centre. Compare with references averaged over
@@ -512,27 +514,39 @@ def to_mitsuba_dict(
         alpha = background == "alpha"
 
     cam = scene.camera
-    if cam.orthographic:
-        raise SceneError("the Mitsuba bridge renders perspective cameras only (use the NumPy reference)",
-                         field="camera.projection")  # fmt: skip
     if cam.pixel_aspect != 1.0:
-        raise SceneError("Mitsuba 3's perspective camera has square pixels only", field="camera.pixel_aspect")
+        raise SceneError("Mitsuba 3's cameras have square pixels only", field="camera.pixel_aspect")
+    if cam.orthographic and any(cam.principal_offset):
+        raise SceneError(
+            "Mitsuba 3's orthographic camera has no principal point offset", field="camera.principal_offset"
+        )
     point_sets = _scene_point_sets(scene, positions)
     near, far = camera_range(cam, bounding_boxes(point_sets))  # the real-time camera's near plane (and far)
     if far is None:  # none: beyond every point
         points = np.concatenate(point_sets) if point_sets else np.zeros((0, 3))
         _, extent = clip_planes(np.asarray(cam.position, dtype=np.float64), points)
         far = max(2.0 * extent, 10.0 * near)
+    to_world = look_at_matrix(cam.position, cam.look_at, cam.up)
+    if cam.orthographic:
+        # Mitsuba's orthographic view window is x in [-1, 1], y in [-1/aspect, 1/aspect] in camera space: scaled
+        # by ortho_height * aspect / 2 it is ortho_height high, with square pixels
+        scale = float(cam.ortho_height) * width / height / 2.0
+        near = max(near, 1e-6 * far)  # Mitsuba asks for a positive near plane
+        projection = {"type": "orthographic", "to_world": _transform(to_world @ np.diag([scale, scale, 1.0, 1.0]))}
+    else:
+        projection = {
+            "type": "perspective",
+            "fov": float(cam.fov_y),
+            "fov_axis": "y",
+            "to_world": _transform(to_world),
+            # Mitsuba moves the principal point the other way (measured: tests/scene/test_camera_intrinsics.py)
+            "principal_point_offset_x": -float(cam.principal_offset[0]),
+            "principal_point_offset_y": -float(cam.principal_offset[1]),
+        }
     out["sensor"] = {
-        "type": "perspective",
-        "fov": float(cam.fov_y),
-        "fov_axis": "y",
+        **projection,
         "near_clip": float(near),
         "far_clip": float(far),
-        "to_world": _transform(look_at_matrix(cam.position, cam.look_at, cam.up)),
-        # Mitsuba moves the principal point the other way (measured: tests/scene/test_camera_intrinsics.py)
-        "principal_point_offset_x": -float(cam.principal_offset[0]),
-        "principal_point_offset_y": -float(cam.principal_offset[1]),
         "film": {
             "type": "hdrfilm",
             "width": width,
