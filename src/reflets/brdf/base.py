@@ -142,7 +142,8 @@ class Material(BaseModel):
     @property
     def tabulated(self) -> bool:
         """The area-light methods' per-material integrals (LTC, analytic, biased) stand for it: constant
-        parameters, a lobe their tables fit. A textured or anisotropic glTF material is lit by ``forward``."""
+        parameters, a lobe their tables fit. ``ltc`` reads a textured glTF material per fragment instead
+        (``fragment_ltc``); the other methods, and ``ltc`` for an anisotropic lobe, leave it to ``forward``."""
         return True
 
     @property

@@ -285,8 +285,8 @@ class Panels:
             self._events.append(event(items[k]))
 
     def _field(self, key: str, field: str, value, event) -> None:
-        """One editable parameter: a number, a 3-vector (a colour for power and albedo fields), a flag, a list
-        of 3-vectors (a quad's corners); anything else is shown as text."""
+        """One editable parameter: a number, a 3-vector (a colour for power and albedo fields), an RGBA colour
+        (glTF's base colour), a flag, a list of 3-vectors (a quad's corners); anything else is shown as text."""
         imgui = self.imgui
         shown = self._pending.get(key, value)
         label = f"{field}##{key}"
