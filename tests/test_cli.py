@@ -201,6 +201,30 @@ def test_existing_output_is_kept_when_the_scene_is_bad(capsys, tmp_path):
     assert code == 2 and out.read_bytes() == b"precious"
 
 
+def test_an_output_never_replaces_one_of_the_scene_s_own_inputs(capsys, tmp_path, monkeypatch):
+    """render / reference -o naming the scene's texture, environment map or height-field file (a .png, a .hdr and
+    an .npy are outputs too): one line, exit 2, the file untouched (render used to write over them)."""
+    from PIL import Image
+
+    monkeypatch.chdir(tmp_path)
+    Image.fromarray(np.full((8, 8, 3), 200, np.uint8)).save("wood.png")
+    write_image("sky.hdr", np.full((8, 16, 3), 0.5, np.float32))
+    np.save("ground.npy", np.zeros((4, 4)))
+    scene = _scene(tmp_path, '[camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\nsize = [16, 12]\n'
+                   '[materials.m]\ntype = "gltf"\nbase_color_texture = { texture = "wood.png" }\n'
+                   '[[mesh]]\nshape = "sphere"\nmaterial = "m"\n'
+                   '[[mesh]]\nshape = "heightfield"\nfile = "ground.npy"\nmaterial = "m"\n'
+                   '[[light]]\ntype = "environment"\nfile = "sky.hdr"\n')  # fmt: skip
+    inputs = ("wood.png", "sky.hdr", "ground.npy")
+    before = {name: (tmp_path / name).read_bytes() for name in inputs}
+    for argv in (["render", str(scene), "-o", "wood.png"], ["render", str(scene), "-o", str(tmp_path / "sky.hdr")],
+                 ["reference", str(scene), "-o", "ground.npy", "--spp", "1"]):  # fmt: skip
+        code, _, err = run_cli(capsys, *argv)
+        assert code == 2 and "own input files" in err and len(err.strip().splitlines()) == 1, err
+    assert all((tmp_path / name).read_bytes() == data for name, data in before.items())
+    assert main(["render", str(scene), "-o", "out.png"]) == 0  # another name is fine
+
+
 def test_compare_bad_inputs(capsys, tmp_path, rng):
     write_image(tmp_path / "a.exr", rng.random((4, 4, 3)).astype(np.float32))
     write_image(tmp_path / "b.exr", rng.random((5, 4, 3)).astype(np.float32))

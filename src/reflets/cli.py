@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from . import jsonio
-from .errors import ARRAY_READ_ERRORS, ArgumentError, RefletsError
+from .errors import ARRAY_READ_ERRORS, ArgumentError, OutputError, RefletsError
 
 EXIT_USER_ERROR = 2
 
@@ -84,12 +84,13 @@ def _asset_options(p) -> None:
 
 def cmd_render(args) -> int:
     from .api import render
-    from .imageio import IMAGE_WRITE_EXTENSIONS, check_output_path, write_image
+    from .imageio import IMAGE_WRITE_EXTENSIONS, check_not_input, check_output_path, write_image
 
     out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".exr")
     check_output_path(out, IMAGE_WRITE_EXTENSIONS)
     size = _size(args.size) if args.size else None
     scene = _scene_argument(args)
+    check_not_input(out, scene.input_files() | {Path(args.scene)})
     _check_render_memory(out, size or tuple(scene.camera.size))
     image = render(scene, method=args.method, size=size, seed=args.seed, spp=args.spp, **_params(args.param))
     write_image(out, image, exposure=args.exposure, tonemap=args.tonemap, bit_depth=args.bit_depth)
@@ -98,7 +99,7 @@ def cmd_render(args) -> int:
 
 
 def cmd_view(args) -> int:
-    from .imageio import IMAGE_WRITE_EXTENSIONS, check_output_path
+    from .imageio import IMAGE_WRITE_EXTENSIONS, check_not_input, check_output_path
     from .viewer.window import ViewerWindow, load_script
 
     script = load_script(args.script) if args.script else None
@@ -110,6 +111,12 @@ def cmd_view(args) -> int:
         raise ArgumentError(f"must be at least 1, got {args.frames}", field="--frames")
     size = _size(args.size) if args.size else None
     window = ViewerWindow(args.scene, method=args.method, size=size, **_params(args.param))
+    if args.screenshot:
+        try:
+            check_not_input(args.screenshot, window.controller.scene.input_files() | {Path(args.scene)})
+        except OutputError:
+            window.close()
+            raise
     window.controller.handle({"type": "exposure", "stops": args.exposure})
     window.controller.handle({"type": "tonemap", "mode": args.tonemap})
     status = window.run(frames=args.frames, screenshot=args.screenshot, script=script, save_scene=args.save_scene)
@@ -332,15 +339,19 @@ def cmd_ar_run(args) -> int:
 
 
 def cmd_reference(args) -> int:
-    from .imageio import check_output_path, write_image
+    from .imageio import check_not_input, check_output_path, write_image
     from .reference import reference
 
     out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".ref.exr")
     check_output_path(out, (".exr", ".npy"))
     stderr_path = out.with_name(out.stem + ".stderr" + out.suffix)
     size = _size(args.size) if args.size else None
+    scene = _scene_argument(args)
+    inputs = scene.input_files() | {Path(args.scene)}
+    for path in (out, stderr_path):
+        check_not_input(path, inputs)
     result = reference(
-        _scene_argument(args),
+        scene,
         spp=args.spp,
         seed=args.seed,
         engine=args.engine,

@@ -504,6 +504,14 @@ def check_output_path(path: str | Path, allowed: Iterable[str] = IMAGE_WRITE_EXT
     return p
 
 
+def check_not_input(path: str | Path, inputs: Iterable[str | Path]) -> None:
+    """Refuse an output that would replace one of the files the work reads (the scene, its meshes, textures,
+    maps): an OutputError naming it, before anything is written."""
+    target = Path(path).resolve()
+    if any(target == Path(i).resolve() for i in inputs):
+        raise OutputError("is one of the scene's own input files; give the output another name", file=path)
+
+
 def write_image(
     path: str | Path, image: np.ndarray, *, exposure: float = 0.0, tonemap: str = "srgb", bit_depth: int = 8
 ) -> Path:

@@ -462,6 +462,24 @@ class Scene(Strict):
             return None if self.environment is not None else (0.0, 0.0, 0.0)
         return None if self.background == "environment" else tuple(self.background)
 
+    def input_files(self) -> set[Path]:
+        """Every file the scene reads — mesh and height-field files, textures, light masks, environment maps,
+        measured BRDFs, orientation fields: each a ``Path`` field —, resolved. An output must not replace one."""
+        found: set[Path] = set()
+
+        def walk(value) -> None:
+            if isinstance(value, Path):
+                found.add(self.resolve(value).resolve())
+            elif isinstance(value, dict):
+                for item in value.values():
+                    walk(item)
+            elif isinstance(value, list | tuple):
+                for item in value:
+                    walk(item)
+
+        walk(self.model_dump(exclude_none=True))
+        return found
+
     def resolve(self, path: Path) -> Path:
         """A path from the scene, made absolute against the scene file's folder."""
         path = Path(path).expanduser()
