@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from reflets.textures import TextureData, swizzled
+from reflets.textures import TextureData, swizzled, texture_bytes
+
+TEXTURE_BYTES = texture_bytes
 
 
 def _data(srgb: bool, shape=(6, 10)) -> TextureData:
@@ -79,3 +81,38 @@ def test_gpu_samples_a_normal_map_at_float_precision(ctx):
     value = np.frombuffer(target.read(components=4, dtype="f4"), dtype=np.float32)
     assert abs(value[0] * 255.0 - expected) < 0.05, (value[0] * 255.0, expected)
     assert abs(expected - np.rint(expected)) > 0.2  # between two codes: what an 8-bit chain could not hold
+
+
+def test_a_gltf_image_in_a_file_it_names_is_read_again_when_that_file_changes(tmp_path, monkeypatch):
+    """An image a .gltf names by uri (or holds in its .bin) is cached by the stamps of those files too: an unchanged
+    one is neither read nor hashed again (the reference looks textures up per batch), an edited image file is
+    decoded again, and an edited .bin makes the document be read again."""
+    import os
+    import shutil
+    from pathlib import Path
+
+    from PIL import Image
+
+    from reflets import textures
+    from reflets.gltf_file import read_gltf
+    from reflets.textures import TextureRef, load_texture
+
+    def touch(path: Path) -> None:
+        stat = path.stat()
+        os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns + 10**9))
+
+    source = Path(__file__).parent / "data" / "gltf" / "SheenTest"
+    for name in ("SheenTest.gltf", "SheenTest.bin", "sheen.png"):
+        shutil.copy(source / name, tmp_path / name)
+    ref = TextureRef(texture=tmp_path / "SheenTest.gltf", image=0)
+    first = load_texture(ref, False)
+    reads = []
+    monkeypatch.setattr(textures, "texture_bytes", lambda r: reads.append(r) or TEXTURE_BYTES(r))
+    assert load_texture(ref, False) is first and not reads  # unchanged: the cached texture, nothing read
+    Image.fromarray(np.full((4, 4, 4), 77, np.uint8)).save(tmp_path / "sheen.png")
+    touch(tmp_path / "sheen.png")
+    again = load_texture(ref, False)
+    assert again is not first and np.all(again.codes == 77) and len(reads) == 1
+    document = read_gltf(tmp_path / "SheenTest.gltf")
+    touch(tmp_path / "SheenTest.bin")
+    assert read_gltf(tmp_path / "SheenTest.gltf") is not document

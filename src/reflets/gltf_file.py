@@ -98,6 +98,7 @@ class GltfFile:
             raise SceneError(f"extensionsRequired: {', '.join(unknown)} not supported by reflets", file=path)
         self._buffers: dict[int, bytes] = {}
         self._lock = threading.Lock()
+        self.stamp: tuple = ()  # external_stamp() when read (read_gltf)
 
     # ------------------------------------------------------------------------------------------ raw data
 
@@ -118,6 +119,22 @@ class GltfFile:
                 raise SceneError(f"buffers[{index}] has no uri and the file no binary chunk", file=self.path)
             return bytes(blob)
         return self._read_uri(uri, f"buffers[{index}].uri")
+
+    def external_stamp(self) -> tuple:
+        """(path, size, modification time) of every file the document's buffers and images name by uri (None for
+        one missing): read_gltf's cache and the textures' see an edited .bin or image file by it."""
+        uris = [item.uri for item in (*(self.doc.buffers or []), *(self.doc.images or [])) if item.uri]
+        stamp = []
+        for uri in uris:
+            if uri.startswith("data:"):
+                continue
+            target = self.path.parent / urllib.parse.unquote(uri)
+            try:
+                stat = target.stat()
+                stamp.append((str(target), stat.st_size, stat.st_mtime_ns))
+            except OSError:
+                stamp.append((str(target), None, None))
+        return tuple(stamp)
 
     def _read_uri(self, uri: str, where: str) -> bytes:
         if uri.startswith("data:"):
@@ -409,7 +426,8 @@ _FILES_LOCK = threading.Lock()
 
 
 def read_gltf(path: str | Path) -> GltfFile:
-    """The parsed file at ``path`` (cached by path, size and modification time)."""
+    """The parsed file at ``path`` (cached by path, size and modification time, and those of the files it names:
+    an edited .bin is read again)."""
     path = Path(path).absolute()
     try:
         stat = path.stat()
@@ -419,14 +437,17 @@ def read_gltf(path: str | Path) -> GltfFile:
         raise SceneError("is not a regular file", file=path)
     key = (str(path), stat.st_size, stat.st_mtime_ns)
     with _FILES_LOCK:
-        if key in _FILES:
+        known = _FILES.get(key)
+        if known is not None:
             _FILES.move_to_end(key)
-            return _FILES[key]
+    if known is not None and known.external_stamp() == known.stamp:
+        return known
     with path.open("rb") as f:
         head = f.read(4)
     if path.suffix.lower() == ".glb" and head != b"glTF":
         raise SceneError("not a binary glTF file (no 'glTF' magic)", file=path)
     parsed = GltfFile(path)
+    parsed.stamp = parsed.external_stamp()
     with _FILES_LOCK:
         _FILES[key] = parsed
         while len(_FILES) > FILE_CACHE_ENTRIES:

@@ -266,10 +266,12 @@ def load_texture(ref: TextureRef, role_srgb: bool) -> TextureData:
     except OSError as exc:
         raise SceneError(f"cannot read the texture ({exc.strerror or type(exc).__name__})", file=path) from None
     file_key = (str(path), ref.image, stat.st_size, stat.st_mtime_ns, srgb, tuple(ref.wrap), ref.filter, ref.channels)
-    # a .gltf's image may lie in another file (its .bin), whose changes the .gltf's stat does not show
-    by_file = ref.image is None or path.suffix.lower() == ".glb"
+    if ref.image is not None:  # inside a glTF file, maybe in a .bin or image file it names: their stamps too
+        from .gltf_file import read_gltf
+
+        file_key += read_gltf(path).stamp
     with _LOCK:
-        known = _BY_FILE.get(file_key) if by_file else None
+        known = _BY_FILE.get(file_key)
         if known is not None and known.key in _DECODED:
             _DECODED.move_to_end(known.key)
             return known
@@ -277,8 +279,7 @@ def load_texture(ref: TextureRef, role_srgb: bool) -> TextureData:
     decode = lambda: decode_image_bytes(data, what)  # noqa: E731
     decoded = texture_data(decode, data, srgb, ref.wrap, ref.filter == "nearest", ref.channels)
     with _LOCK:
-        if by_file:
-            _BY_FILE[file_key] = decoded
+        _BY_FILE[file_key] = decoded
         for key in [k for k, v in _BY_FILE.items() if v.key not in _DECODED]:  # evicted: forget its file too
             del _BY_FILE[key]
     return decoded
