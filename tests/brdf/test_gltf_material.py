@@ -375,3 +375,16 @@ def test_anisotropy_equals_the_extensions_formula(params, rng):
 def test_anisotropy_standard_checks_and_glsl(params, ctx, rng):
     run_standard_checks(Gltf(**params), rng)
     check_glsl_parity(Gltf(**params), ctx, rng)
+
+
+def test_the_area_light_methods_lobe_summary_follows_unlit_and_specular():
+    """analytic / biased light a constant glTF material by its summary: an unlit one reflects nothing, and the
+    diffuse albedo is c (1 − m)(1 − w max F₀) — KHR_materials_specular's weight and tint included (it was 1 − 0.04
+    whatever they were)."""
+    from reflets.brdf.gltf import Gltf
+
+    assert Gltf(unlit=True).lobe_summary()[:2] == ((0.0, 0.0, 0.0), 0)
+    base = (0.8, 0.2, 0.2, 1.0)
+    assert Gltf(base_color=base, metallic=0.0, specular=0.0).lobe_summary()[0] == pytest.approx((0.8, 0.2, 0.2))
+    tinted = Gltf(base_color=base, metallic=0.5, specular_color=(2.0, 1.0, 1.0)).lobe_summary()[0]
+    assert tinted == pytest.approx(tuple(c * 0.5 * (1 - 0.08) for c in base[:3]))

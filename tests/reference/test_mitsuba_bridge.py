@@ -541,9 +541,7 @@ def test_textured_gltf_assets_through_mitsuba_match_the_numpy_reference(asset, b
     """glTF materials as Mitsuba's principled BSDF with bitmap textures (uv transform, filter, wrap), the normal map
     through ``normalmap`` and the emission as an area emitter: the two references agree on 4 × 4 blocks (measured
     4.3e-4 and 2.0e-3: the helmet is mostly metal, where Disney's BSDF is Appendix B's; its diffuse differs, below)."""
-    import reflets
-    from reflets.bench.assets import lit_for_comparison
-    from reflets.metrics import relmse
+    from reflets.bench.assets import block_means, lit_for_comparison
     from reflets.scene.assets import asset_path
 
     path = Path(__file__).parents[1] / "data" / "gltf" / asset / f"{asset}.glb"
@@ -551,8 +549,7 @@ def test_textured_gltf_assets_through_mitsuba_match_the_numpy_reference(asset, b
     scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"size": (160, 120)})})
     mitsuba = render_mitsuba(scene, spp=64)
     numpy_ref = reflets.reference(scene, spp=16, progress=False, pixel="box").image
-    blocks = lambda image: image.reshape(30, 4, 40, 4, 3).mean(axis=(1, 3))  # noqa: E731
-    assert relmse(blocks(mitsuba), blocks(numpy_ref)) < bound
+    assert relmse(block_means(mitsuba), block_means(numpy_ref)) < bound
 
 
 @pytest.mark.slow
@@ -564,8 +561,6 @@ def test_principled_differs_from_appendix_b_by_its_diffuse_only(metallic, roughn
     """Disney's diffuse (Burley's retro-reflection) is brighter than Appendix B's Lambert on rough dielectrics,
     more so the rougher (mean over the sphere +2.8 %, +6.2 %, +10.8 % at roughness 0.2, 0.5, 0.9: docs/reference.md);
     a metal agrees within 1 % (0.990)."""
-    import reflets
-
     scene = load_dict({
         "camera": {"position": [0, 0.5, 2.5], "look_at": [0, 0, 0], "size": [96, 72]},
         "materials": {"m": {"type": "gltf", "base_color": [0.8, 0.5, 0.3, 1], "metallic": metallic,
@@ -591,7 +586,7 @@ def test_gltf_features_principled_cannot_express_are_refused_in_one_line(tmp_pat
         assert "\n" not in str(info.value) and "materials.g" in str(info.value.field)
 
 
-def test_an_orthographic_camera_matches_the_numpy_reference():
+def test_an_orthographic_camera_matches_the_numpy_reference(tmp_path):
     """The orthographic sensor scaled to the camera's window: a lit plane as the NumPy reference sees it (box
     pixels), and a window of half the height would differ by far more."""
     camera = {"position": [0.5, 3, 3], "look_at": [0, 0, 0], "projection": "orthographic", "ortho_height": 3.0,
@@ -604,5 +599,7 @@ def test_an_orthographic_camera_matches_the_numpy_reference():
     half = plane_scene(light, camera={**camera, "ortho_height": 1.5})
     assert relmse(image, reflets.reference(half, spp=16, pixel="box", progress=False).image) > 0.1  # measured 0.27
     shifted = plane_scene(light, camera={**camera, "principal_offset": [0.1, 0.0]})
+    workdir = Path(tmp_path) / "mitsuba"
     with pytest.raises(SceneError, match="principal point"):
-        render_mitsuba(shifted, spp=1)
+        to_mitsuba_dict(shifted, workdir)
+    assert not workdir.exists()  # refused before anything is written

@@ -35,8 +35,8 @@ clamps it), V_s its fitted Smith visibility (the extension's "Charlie" λ, not A
 approximation), no Fresnel, and E(μ) the sheen lobe's directional albedo (the fourth channel of the split-sum
 table, :func:`ibl_table`; both renderers interpolate the same table) — the albedo-scaling layering in its
 reciprocal form. A limit of the extension's formulas: with its λ, E exceeds 1 at grazing angles for smooth
-sheens (E = 2.2 at n·v = 1/64, roughness 0.07; 0.85 at 1/16), which would make the scaling negative; it is clamped
-at 0.
+sheens (E = 2.1 at n·v = 1/64, roughness 0.07; 0.90 at 1/16: ``sheen_albedo``'s values), which would make the
+scaling negative; it is clamped at 0.
 
 KHR_materials_specular tints and weighs the dielectric's Fresnel (Khronos' ``fresnel_mix``): with w = ``specular``
 (× A of ``specular_texture``) and F₀ = min(((η − 1) / (η + 1))² × ``specular_color`` (× RGB of its texture, sRGB),
@@ -412,7 +412,7 @@ class Gltf(Material):
         path's Lambertian stand-in for it (a sphere under two quad lights against the reference: 0.06 % against
         0.73 %; docs/assets.md). An anisotropic lobe is read as the isotropic one of the same area (as by the split
         sum), so ``auto`` lights it by ``forward``."""
-        return self.textured or not self.sheened
+        return self.textured or self.unlit or not self.sheened
 
     def _anisotropy(self, direction: np.ndarray, strength: np.ndarray) -> np.ndarray:
         """(…, 3): the direction turned by ``anisotropy_rotation`` and made unit ((1, 0) where it is zero), s²."""
@@ -454,7 +454,12 @@ class Gltf(Material):
         return self.metallic == 1.0 and not self.sheened  # a smooth sheen's albedo exceeds 1 at grazing views
 
     def lobe_summary(self):
-        diffuse = tuple(float(c) * (1.0 - self.metallic) * (1.0 - self.dielectric_f0) for c in self.base_color[:3])
+        """The diffuse albedo at normal incidence, c (1 − m)(1 − w max F₀) (KHR_materials_specular's weight and
+        tint included), and the GGX lobe as a Blinn-Phong one; an unlit material reflects nothing."""
+        if self.unlit:
+            return (0.0, 0.0, 0.0), 0, 0.0
+        weight = 1.0 - self.specular * float(np.max(self._specular_f0))
+        diffuse = tuple(float(c) * (1.0 - self.metallic) * weight for c in self.base_color[:3])
         from .base import blinn_phong_exponent
 
         return diffuse, 2, blinn_phong_exponent(self.alpha)

@@ -475,6 +475,16 @@ def to_mitsuba_dict(
                 "(reflets reference --engine numpy), which honours shadows = false",
                 field=f"light[{i}].shadows",
             )
+        if isinstance(light, PointLight) and light.spot is not None:
+            raise SceneError("Mitsuba's spot light falls off its own way (not glTF's): the bridge takes isotropic "
+                             "point lights", field=f"light[{i}].spot")  # fmt: skip
+    cam = scene.camera
+    if cam.pixel_aspect != 1.0:
+        raise SceneError("Mitsuba 3's cameras have square pixels only", field="camera.pixel_aspect")
+    if cam.orthographic and any(cam.principal_offset):
+        raise SceneError(
+            "Mitsuba 3's orthographic camera has no principal point offset", field="camera.principal_offset"
+        )
     workdir.mkdir(parents=True, exist_ok=True)
 
     out: dict[str, Any] = {"type": "scene", "integrator": {"type": "direct", "hide_emitters": False}}
@@ -488,9 +498,6 @@ def to_mitsuba_dict(
             out[f"mesh_{i}"]["emitter"] = emitters[mesh.material]
 
     for i, light in enumerate(scene.light):
-        if isinstance(light, PointLight) and light.spot is not None:
-            raise ArgumentError(f"light[{i}].spot: Mitsuba's spot light falls off its own way (not glTF's): the bridge "
-                                "takes isotropic point lights", field=f"light[{i}].spot")  # fmt: skip
         if isinstance(light, PointLight):
             out[f"light_{i}"] = {"type": "point", "position": list(light.position), "intensity": _rgb(light.intensity)}
         elif isinstance(light, DirectionalLight):
@@ -513,13 +520,6 @@ def to_mitsuba_dict(
             out["background"] = {"type": "constant", "radiance": _rgb(color)}
         alpha = background == "alpha"
 
-    cam = scene.camera
-    if cam.pixel_aspect != 1.0:
-        raise SceneError("Mitsuba 3's cameras have square pixels only", field="camera.pixel_aspect")
-    if cam.orthographic and any(cam.principal_offset):
-        raise SceneError(
-            "Mitsuba 3's orthographic camera has no principal point offset", field="camera.principal_offset"
-        )
     point_sets = _scene_point_sets(scene, positions)
     near, far = camera_range(cam, bounding_boxes(point_sets))  # the real-time camera's near plane (and far)
     if far is None:  # none: beyond every point

@@ -202,7 +202,7 @@ class Auto(Technique):
         # reflecting pass before it does its reflections only as the extras' pass)
         blended = [bool(meshes) and all(scene.materials[scene.mesh[i].material].blended for i in meshes)
                    for _, _, meshes, _ in plan]  # fmt: skip
-        extras = max(k for k in range(len(plan)) if not blended[k])
+        extras = max((k for k in range(len(plan)) if not blended[k]), default=len(plan) - 1)  # all blended: the one
         for k, (method, pass_scene, meshes, additive) in enumerate(plan):
             technique = get_technique(method)(
                 self.ctx,
