@@ -12,13 +12,10 @@ import warnings
 from importlib import resources
 
 import reflets
+from reflets.bench.assets import block_means as blocks
 from reflets.metrics import relmse
 
 W, H = 160, 120
-
-
-def blocks(image):
-    return image.reshape(H // 4, 4, W // 4, 4, 3).mean(axis=(1, 3))
 
 
 def scene(strength: float) -> reflets.Scene:

@@ -19,6 +19,7 @@ from importlib import resources
 import numpy as np
 
 import reflets
+from reflets.bench.assets import block_means as blocks
 from reflets.brdf.gltf import Gltf
 from reflets.metrics import relmse
 
@@ -33,11 +34,6 @@ MATERIALS = {
     "sheen": {"base_color": [0.2, 0.2, 0.6, 1], "metallic": 0.0, "roughness": 0.8, "sheen_color": [0.9, 0.9, 0.9],
               "sheen_roughness": 0.4},  # fmt: skip
 }
-
-
-def blocks(image):
-    h, w = image.shape[:2]
-    return image.reshape(h // 4, 4, w // 4, 4, 3).mean(axis=(1, 3))
 
 
 def scene(material: dict) -> reflets.Scene:

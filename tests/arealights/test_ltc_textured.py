@@ -8,14 +8,10 @@ import numpy as np
 from PIL import Image
 
 import reflets
+from reflets.bench.assets import block_means as blocks  # 4 x 4-pixel means: sub-pixel highlights aside
 from reflets.metrics import relmse
 
 W, H = 96, 72
-
-
-def blocks(image: np.ndarray) -> np.ndarray:
-    """4 × 4-pixel block means: a highlight's sub-pixel position is the pixel filter's business."""
-    return image.reshape(H // 4, 4, W // 4, 4, 3).mean(axis=(1, 3))
 
 
 def textured_scene(tmp_path, coat: float) -> reflets.Scene:

@@ -77,11 +77,12 @@ benchmarks/results/arealights.md; the host was shared, so compare within the run
 Per fragment, against the NumPy reference with shadows (4 × 4-pixel block means, relative MSE): two textured
 spheres (checker base colour, roughness 0.15 / 0.7 and metallic 0 / 1 in stripes, one clear-coated) under two quad
 lights 4.4 × 10⁻⁴ (``forward``'s 8 × 8 midpoint rule 3.7 × 10⁻⁴; tests/arealights/test_ltc_textured.py); the
-gallery's DamagedHelmet at 160 × 120 0.22 % (forward 0.26 %; per pixel 0.91 % against 1.43 %) in 0.6× forward's
-frame time. Constant glTF spheres under two quad lights (``python tools/ltc_gltf_spheres.py``), per fragment / the
-one-material table / ``forward``: dielectric roughness 0.2: 0.02 / 0.39 / 0.02 %; 0.5: 0.03 / 0.08 / 0.02 %; metal
-roughness 0.02: 0.04 / 0.03 / 0.13 %; 0.3: 0.04 / 0.04 / 0.02 %; clear coat over roughness 0.6: 0.04 / 0.60 /
-0.03 %; sheen 0.73 / 0.06 / 0.02 % (hence the constant sheen's exception).
+gallery's DamagedHelmet (320 × 240, 16 spp) 0.34 % per pixel, 0.10 % on blocks (forward 1.64 % / 0.25 %) in 0.6×
+forward's frame time (``python tools/ltc_gltf_spheres.py --helmet``). Constant glTF spheres under two quad lights
+(``python tools/ltc_gltf_spheres.py``), per fragment / the one-material table / ``forward``: dielectric roughness
+0.2: 0.02 / 0.39 / 0.02 %; 0.5: 0.03 / 0.08 / 0.02 %; metal roughness 0.02: 0.04 / 0.03 / 0.13 %; 0.3: 0.04 / 0.04 /
+0.02 %; clear coat over roughness 0.6: 0.04 / 0.60 / 0.03 %; sheen 0.73 / 0.06 / 0.02 % (hence the constant
+sheen's exception).
 
 A Lambertian term (``kd`` / ``diffuse`` / ``albedo``) is split off and integrated exactly (identity matrix);
 the table fits the rest of the BRDF. Ashikhmin–Shirley's coupled diffuse term and measured data are not

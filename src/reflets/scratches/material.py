@@ -201,7 +201,7 @@ class Scratched(Oriented, Material):
             raise ValueError("give conductor (eta, k) or ior, not both")
         if self.fresnel == "none" and (self.conductor is not None or self.ior is not None):
             raise ValueError('fresnel = "none" takes neither conductor nor ior')
-        if getattr(self.base, "alpha_mode", "opaque") != "opaque":  # the scratches pass neither cuts nor blends
+        if self.base.cutout:  # the scratches pass neither cuts nor blends
             raise ValueError(f'a glTF base must be opaque (alpha_mode "{self.base.alpha_mode}" is not taken here)')
         return self
 

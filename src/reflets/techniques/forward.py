@@ -526,8 +526,9 @@ class Forward(Technique):
         ctx.disable(ctx.DEPTH_TEST)
 
     def _draw_mesh(self, draw: MeshDraw, per_frame: dict, frame: int, seed: int) -> None:
-        for texture in draw.filtered:
-            texture.anisotropy = self.params.texture_anisotropy
+        for texture in draw.filtered:  # shared textures: set once (each set binds the texture)
+            if texture.anisotropy != self.params.texture_anisotropy:
+                texture.anisotropy = self.params.texture_anisotropy
         samplers = {}
         textures = {**draw.material_textures, **draw.own_textures}
         for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment

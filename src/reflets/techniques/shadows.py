@@ -199,6 +199,8 @@ class ShadowMaps:
             first, count = self.environment_views
             self.environment_uniforms = _environment_uniforms(views[first : first + count], first, columns, size)
         self._casters = [self._caster(prepared, i) for i in range(len(prepared.meshes))]
+        # the distinct programs (the depth one, the cut-out variants: a program may serve several meshes)
+        self._programs = list({id(caster[0]): caster[0] for caster in self._casters}.values())
         self._fbo = self._own(ctx.framebuffer(depth_attachment=self.atlas))
         self._draw(range(len(views)))
 
@@ -209,8 +211,8 @@ class ShadowMaps:
         if not material.cutout:
             program = get_program(self.ctx, DEPTH_PROGRAM)
             return program, self._own(prepared.vertex_array(program, index)), {}, None
-        textured = material.base_color_texture is not None
         flags = material.flags()
+        textured = flags["BRDF_GLTF_BASE_MAP"] > 0
         program = get_program(self.ctx, CUTOUT_PROGRAM, BRDF_GLTF_BASE_MAP=flags["BRDF_GLTF_BASE_MAP"],
                               BRDF_GLTF_BLEND=flags["BRDF_GLTF_BLEND"])  # fmt: skip
         texture = texture_for(self.ctx, material.texture_data("base_color_texture")) if textured else None
@@ -308,7 +310,7 @@ class ShadowMaps:
             self._fbo.clear(depth=1.0, viewport=viewport)
             ctx.viewport = viewport
             view_proj = self._views[k]["view_proj"].T.astype(np.float32).tobytes()
-            for program in {id(caster[0]): caster[0] for caster in self._casters}.values():  # one to three
+            for program in self._programs:
                 set_uniforms(program, {"u_view_proj": view_proj})
             for program, vao, uniforms, texture in self._casters:
                 if texture is not None:

@@ -22,8 +22,7 @@ void main() {
     mat3 frame = shading_frame(n, v_tangent);
 #ifdef MATERIAL_SURFACE
     material_surface(vec4(v_uv, v_uv1), frame);  // a textured base (a glTF material): its textures into its parameters
-    material_antialias(n);
-    if (!material_covered()) discard;
+    material_antialias(n);  // (no coverage test: the base is opaque, Scratched refuses cut-out and blended ones)
 #endif
 #if OUTPUT == 1
     f_color = vec4(v_position, 1.0);
