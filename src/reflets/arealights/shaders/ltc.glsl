@@ -239,9 +239,7 @@ void ltc_setup(mat3 frame, vec3 wo) {
     float coat_weight, coat_alpha, coat_albedo;
     vec3 coat_n, v = frame * wo;
     material_coat_ibl(frame, v, coat_weight, coat_n, coat_alpha, coat_albedo);
-    vec3 coat_t = frame[0] - coat_n * dot(coat_n, frame[0]);
-    coat_t = dot(coat_t, coat_t) > 1e-12 ? normalize(coat_t) : frame[1];
-    mat3 coat_frame = mat3(coat_t, cross(coat_n, coat_t), coat_n);
+    mat3 coat_frame = shading_frame(coat_n, vec4(frame[0], 1.0));  // any frame about n_c: ltc_transform turns it
     vec3 coat_wo = v * coat_frame;  // transpose(coat_frame) * v
     g_ltc_coat_transform = ltc_transform(coat_frame, coat_wo, texture(a_ltc_minv, ltc_lookup(coat_wo.z, ltc_roughness(coat_alpha))));
     g_ltc_coat_lobe = coat_weight * coat_albedo;
