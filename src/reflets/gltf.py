@@ -32,6 +32,8 @@ ANISOTROPY = "KHR_materials_anisotropy"
 SPECULAR = "KHR_materials_specular"
 LIGHTS = "KHR_lights_punctual"
 EMISSIVE = "KHR_materials_emissive_strength"
+TRANSMISSION = "KHR_materials_transmission"
+VOLUME = "KHR_materials_volume"
 TRANSFORM = "KHR_texture_transform"
 #: glTF sampler wrap codes
 WRAP_CODES = {"repeat": 10497, "clamp": 33071, "mirror": 33648}
@@ -156,6 +158,13 @@ def _gltf_material(name: str, m, textures: _Textures) -> tuple[dict, list[str]]:
         extensions[ANISOTROPY] = {"anisotropyStrength": m.anisotropy_strength,
                                   "anisotropyRotation": m.anisotropy_rotation,
                                   "anisotropyTexture": info("anisotropy_texture")}  # fmt: skip
+    if m.transmission > 0 or m.transmission_texture is not None:
+        extensions[TRANSMISSION] = {"transmissionFactor": m.transmission,
+                                    "transmissionTexture": info("transmission_texture")}  # fmt: skip
+    if m.thickness > 0 or m.thickness_texture is not None or m.attenuation_distance is not None:
+        extensions[VOLUME] = {"thicknessFactor": m.thickness, "thicknessTexture": info("thickness_texture"),
+                              "attenuationDistance": m.attenuation_distance,
+                              "attenuationColor": list(m.attenuation_color)}  # fmt: skip
     if extensions:
         out["extensions"] = extensions
     return _without_none(out), notes

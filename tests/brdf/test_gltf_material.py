@@ -388,3 +388,24 @@ def test_the_area_light_methods_lobe_summary_follows_unlit_and_specular():
     assert Gltf(base_color=base, metallic=0.0, specular=0.0).lobe_summary()[0] == pytest.approx((0.8, 0.2, 0.2))
     tinted = Gltf(base_color=base, metallic=0.5, specular_color=(2.0, 1.0, 1.0)).lobe_summary()[0]
     assert tinted == pytest.approx(tuple(c * 0.5 * (1 - 0.08) for c in base[:3]))
+
+
+TRANSMITTING = [
+    dict(base_color=(0.8, 0.5, 0.2, 1.0), metallic=0.0, roughness=0.4, transmission=0.7),
+    dict(base_color=(0.3, 0.6, 0.9, 1.0), metallic=0.3, roughness=0.2, transmission=1.0, thickness=0.5),
+]
+
+
+@pytest.mark.parametrize("params", TRANSMITTING)
+def test_transmission_takes_its_share_of_the_diffuse_lobe(params, ctx, rng):
+    """KHR_materials_transmission: base = mix(diffuse, btdf, t) — what is reflected keeps (1 − t) of the diffuse
+    lobe (the transmitted part goes through: the renderers' own paths, reference/transmission.py)."""
+    wo, wi = upper_hemisphere(rng, 4000), upper_hemisphere(rng, 4000)
+    t = params["transmission"]
+    full = appendix_b(params["base_color"], params["metallic"], params["roughness"], wo, wi)
+    specular = appendix_b((0.0, 0.0, 0.0), 0.0, params["roughness"], wo, wi)  # the dielectric's lobe alone
+    diffuse = full - (1 - params["metallic"]) * specular - params["metallic"] * appendix_b(
+        params["base_color"], 1.0, params["roughness"], wo, wi)  # fmt: skip
+    assert np.allclose(Gltf(**params).eval(wo, wi), full - t * diffuse, rtol=1e-9, atol=1e-12)
+    run_standard_checks(Gltf(**params), rng)
+    check_glsl_parity(Gltf(**params), ctx, rng)

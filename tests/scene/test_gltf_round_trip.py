@@ -41,7 +41,8 @@ def assert_same_materials(a, b, atol=0.0):
 
 @pytest.mark.parametrize("asset", ["SheenTest/SheenTest.gltf", "TextureTransformTest/TextureTransformTest.gltf",
                                    "AlphaBlendModeTest/AlphaBlendModeTest.glb",
-                                   "AnisotropyStrengthTest/AnisotropyStrengthTest.glb"])  # fmt: skip
+                                   "AnisotropyStrengthTest/AnisotropyStrengthTest.glb",
+                                   "AttenuationTest/AttenuationTest.glb"])  # fmt: skip
 def test_a_gltf_file_read_exported_and_read_again_has_the_same_materials(tmp_path, asset):
     scene = reflets.load_scene(DATA / asset)
     path, _ = export_gltf(scene, tmp_path / "out.glb")

@@ -157,6 +157,12 @@ class Material(BaseModel):
         """Drawn over what lies behind it by its coverage (glTF's alphaMode BLEND): after the opaque surfaces."""
         return False
 
+    @property
+    def see_through(self) -> bool:
+        """Shows what lies behind it (blended, or transmitting light: glTF's KHR_materials_transmission): drawn after
+        the opaque surfaces and the background, farthest first."""
+        return False
+
     #: the GLSL twin gives the split sum's albedos per fragment (``material_ibl``): no albedo curve is computed
     fragment_ibl: ClassVar[bool] = False
 

@@ -53,6 +53,12 @@ from the geometric normal instead — the same where no normal map tilts the fra
 KHR_materials_unlit (``unlit``): no light is reflected; the surface shows its base colour (× texture) as the radiance
 leaving it, whatever the lights — an emitter with a zero BRDF in both renderers.
 
+KHR_materials_transmission (``transmission``, × R of ``transmission_texture``): a share t of the dielectric's diffuse
+lobe is transmitted instead — f keeps (1 − m)(1 − w max F)(1 − t) c/π — and goes through the surface, tinted by
+c: thin-walled, or into the volume KHR_materials_volume bounds when ``thickness`` > 0 (absorbing by
+``attenuation_color`` over ``attenuation_distance``). The light through is not part of this BRDF: each renderer
+carries it its own way (docs/assets.md, *Transmission*).
+
 Both renderers evaluate the textures first into per-point parameters and then the unchanged BRDF: GLSL through
 ``material_surface`` (``glsl/gltf.glsl``), NumPy through :meth:`Gltf.at` (a :class:`GltfPoints` of arrays).
 """
@@ -91,6 +97,8 @@ SLOTS = (
     ("specular_texture", "m_specular_map", False, "BRDF_GLTF_SPECULAR_MAP"),
     ("specular_color_texture", "m_specular_color_map", True, "BRDF_GLTF_SPECULAR_COLOR_MAP"),
     ("anisotropy_texture", "m_anisotropy_map", False, "BRDF_GLTF_ANISOTROPY_MAP"),
+    ("transmission_texture", "m_transmission_map", False, "BRDF_GLTF_TRANSMISSION_MAP"),
+    ("thickness_texture", "m_thickness_map", False, "BRDF_GLTF_THICKNESS_MAP"),
 )
 #: the smallest sheen roughness rendered (three.js clamps it there: below, the Charlie lobe is a needle at grazing
 #: half vectors)
@@ -118,6 +126,7 @@ class GltfPoints:
     sheen_roughness: np.ndarray | None = None  # (N,), at least MIN_SHEEN_ROUGHNESS
     anisotropy: np.ndarray | None = None  # (N, 3): the direction (cos, sin) in the shading frame and s²; None: none
     unlit: bool = False  # KHR_materials_unlit: reflects nothing (its colour is emitted)
+    transmission: np.ndarray | None = None  # (N,) KHR_materials_transmission's weight; None: none
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         if self.unlit:
@@ -188,6 +197,8 @@ class GltfPoints:
         f_m = self.base + (1.0 - self.base) * schlick[..., None]
         m, dv = self.metallic[..., None], dv[..., None]
         diffuse_weight = 1.0 - w * np.max(f_d, axis=-1, keepdims=True)
+        if self.transmission is not None:  # the transmitted share of the diffuse lobe goes through the surface
+            diffuse_weight = diffuse_weight * (1.0 - self.transmission[..., None])
         value = (1.0 - m) * (diffuse_weight * self.base / np.pi + w * f_d * dv) + m * f_m * dv
         return np.where(up[..., None], value, 0.0)
 
@@ -311,6 +322,13 @@ class Gltf(Material):
     sheen_roughness, sheen_roughness_texture : its roughness (× A; at least 0.07).
     anisotropy_strength, anisotropy_rotation, anisotropy_texture : KHR_materials_anisotropy (module docstring): the
         strength (× B), the direction's turn in radians, the direction in RG (default 0, 0, none: isotropic).
+    transmission, transmission_texture : KHR_materials_transmission's weight (× R; default 0): that share of the
+        dielectric's diffuse lobe is transmitted through the surface instead, tinted by the base colour (module
+        docstring).
+    thickness, thickness_texture : KHR_materials_volume's thickness in the mesh's units (× G; default 0: thin-walled,
+        light goes through unbent; above 0 the mesh bounds a volume of index ``ior``).
+    attenuation_distance, attenuation_color : the volume's Beer–Lambert absorption: light that travels
+        ``attenuation_distance`` (world units; default None: none) inside keeps ``attenuation_color`` of itself.
     alpha_mode : "opaque" (default), "mask" (coverage < alpha_cutoff is a hole) or "blend" (the surface's radiance
         over what lies behind it, weighted by the coverage a: a L + (1 − a) L_behind; its shadow lets 1 − a through).
     """
@@ -350,6 +368,12 @@ class Gltf(Material):
     anisotropy_strength: Unit = 0.0
     anisotropy_rotation: Annotated[float, Field(ge=-1e3, le=1e3, allow_inf_nan=False)] = 0.0
     anisotropy_texture: TextureRef | None = None
+    transmission: Unit = 0.0
+    transmission_texture: TextureRef | None = None
+    thickness: NonNeg = 0.0
+    thickness_texture: TextureRef | None = None
+    attenuation_distance: Annotated[float, Field(gt=0, le=1e30, allow_inf_nan=False)] | None = None
+    attenuation_color: tuple[Unit, Unit, Unit] = (1.0, 1.0, 1.0)
     alpha_mode: Literal["opaque", "mask", "blend"] = "opaque"
     alpha_cutoff: Unit = 0.5
     double_sided: bool = Field(False, description="glTF's flag (reflets shades both sides of every surface)")
@@ -395,6 +419,8 @@ class Gltf(Material):
             points.sheen_roughness = np.full(shape, max(float(self.sheen_roughness), MIN_SHEEN_ROUGHNESS))
         if self.anisotropic:
             points.anisotropy = self._anisotropy(np.array([1.0, 0.0]), np.full(shape, self.anisotropy_strength))
+        if self.transmissive:
+            points.transmission = np.full(shape, float(self.transmission))
         return points
 
     @property
@@ -404,7 +430,26 @@ class Gltf(Material):
 
     @property
     def tabulated(self) -> bool:
-        return not (self.textured or self.anisotropic)
+        return not (self.textured or self.anisotropic or self.transmissive)
+
+    @property
+    def transmissive(self) -> bool:
+        """KHR_materials_transmission (a zero factor disables it, whatever the texture; unlit transmits nothing)."""
+        return self.transmission > 0 and not self.unlit
+
+    @property
+    def volumetric(self) -> bool:
+        """KHR_materials_volume: a non-zero thickness factor makes the mesh the boundary of a refracting volume (as
+        the extension defines it: a path tracer tests the factor only); zero: thin-walled."""
+        return self.transmissive and self.thickness > 0
+
+    @property
+    def absorption(self) -> np.ndarray:
+        """The volume's absorption coefficient σ (per world unit, RGB): −ln(attenuation_color) / distance."""
+        if self.attenuation_distance is None:
+            return np.zeros(3)
+        colour = np.maximum(np.asarray(self.attenuation_color, np.float64), 1e-30)
+        return -np.log(colour) / self.attenuation_distance
 
     @property
     def fragment_ltc(self) -> bool:
@@ -459,6 +504,8 @@ class Gltf(Material):
         if self.unlit:
             return (0.0, 0.0, 0.0), 0, 0.0
         weight = 1.0 - self.specular * float(np.max(self._specular_f0))
+        if self.transmissive:  # that share goes through the surface
+            weight *= 1.0 - self.transmission
         diffuse = tuple(float(c) * (1.0 - self.metallic) * weight for c in self.base_color[:3])
         from .base import blinn_phong_exponent
 
@@ -473,6 +520,16 @@ class Gltf(Material):
     @property
     def blended(self) -> bool:
         return self.alpha_mode == "blend"
+
+    @property
+    def see_through(self) -> bool:
+        return self.blended or self.transmissive
+
+    def thickness_at(self, uv: np.ndarray) -> np.ndarray:
+        """KHR_materials_volume's thickness (N,) at mesh uv, in the mesh's units: the factor × G of its texture."""
+        out = np.full(len(uv), float(self.thickness))
+        texels = self._lookup("thickness_texture", uv)
+        return out if texels is None else out * texels[:, 1]
 
     def holes(self, uv: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Where rays go through (N,) at mesh uv, given uniform numbers ``u`` (N,): a cut-out's coverage under
@@ -547,6 +604,11 @@ class Gltf(Material):
             if texels is not None:
                 roughness = roughness * texels[:, 3]
             points.sheen, points.sheen_roughness = sheen, np.maximum(roughness, MIN_SHEEN_ROUGHNESS)
+        if self.transmissive:
+            points.transmission = np.full(n, float(self.transmission))
+            texels = self._lookup("transmission_texture", uv)
+            if texels is not None:
+                points.transmission = points.transmission * texels[:, 0]
         return points
 
     def _coat_at(self, points: GltfPoints, uv: np.ndarray, frames) -> None:
@@ -609,6 +671,7 @@ class Gltf(Material):
             "BRDF_GLTF_SHEEN": int(self.sheened and not self.unlit),
             "BRDF_GLTF_UNLIT": int(self.unlit),
             "BRDF_GLTF_ANISOTROPY": int(self.anisotropic and not self.unlit),
+            "BRDF_GLTF_TRANSMISSION": 2 if self.volumetric else int(self.transmissive),  # 2: a volume
         }
 
     def uniforms(self) -> dict[str, object]:
@@ -626,6 +689,8 @@ class Gltf(Material):
             "m_specular": (*(float(c) for c in self.specular_color), float(self.specular)),
             "m_anisotropy": (math.cos(self.anisotropy_rotation), math.sin(self.anisotropy_rotation),
                              float(self.anisotropy_strength)),  # fmt: skip
+            "m_transmission": (float(self.transmission), float(self.thickness), float(self.ior)),
+            "m_absorption": tuple(float(c) for c in self.absorption),
         }
         for field, sampler, _, _ in SLOTS:
             ref = getattr(self, field)

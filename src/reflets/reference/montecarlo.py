@@ -42,6 +42,7 @@ from ..scene.model import DirectionalLight, PointLight, Scene
 from .geometry import EMITTERS, MESHES, SceneGeometry
 from .lights import EnvironmentSampler, PolygonSampler
 from .mirrors import MirrorBounce
+from .transmission import MAX_CROSSINGS, NUMBERS_PER_CROSSING, Transmission
 
 RAYS_PER_CHUNK = 1 << 17
 #: bytes per pixel the image holds (float64 mean and standard error, float32 image and stderr) and the working
@@ -114,7 +115,11 @@ class MonteCarloReference:
         self.env = EnvironmentSampler(image, scene.environment) if image is not None else None
         color = scene.background_color()
         self.background = None if color is None else np.asarray(color, dtype=np.float64)
-        self.dims = 2 * len(self.area) + 2 + (2 if self.env else 0) + 2  # + pixel jitter
+        self.transmission = Transmission(self.materials)
+        # the light samples, the BRDF sample, the environment's, a transmissive crossing's, the pixel jitter (last)
+        self.crossing_column = 2 * len(self.area) + 2 + (2 if self.env else 0)
+        crossings = MAX_CROSSINGS * NUMBERS_PER_CROSSING if self.transmission else 0
+        self.dims = self.crossing_column + crossings + 2
         self.mirrors = MirrorBounce(scene, self.geometry.face_mesh)
 
     # ------------------------------------------------------------------------------------------ driver
@@ -202,9 +207,12 @@ class MonteCarloReference:
         out = self.trace(origin, dirs, u, mirrors=True)
         return out.reshape(len(ids), spp, 3)
 
-    def trace(self, origin: np.ndarray, dirs: np.ndarray, u: np.ndarray, mirrors: bool = False) -> np.ndarray:
+    def trace(self, origin: np.ndarray, dirs: np.ndarray, u: np.ndarray, mirrors: bool = False, depth: int = 0,
+              medium: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
         """Radiance arriving along rays (origin + t·dirs) from the first surface they hit; ``mirrors``: add one
-        specular bounce on reflector meshes (reference/mirrors.py)."""
+        specular bounce on reflector meshes (reference/mirrors.py); ``depth``: transmissive surfaces crossed so far,
+        ``medium`` (N, 4): the absorption σ of the volume each ray travels in and 1, or 0 outside
+        (reference/transmission.py)."""
         out = np.zeros((len(u), 3))
         hits = self.geometry.intersect(np.broadcast_to(origin, dirs.shape), dirs, salt=u[:, -1])
         miss = hits.kind < 0
@@ -215,9 +223,13 @@ class MonteCarloReference:
             out[on_emitter] = self._emitter_radiance(hits.prim[on_emitter], dirs[on_emitter], points)
         on_mesh = np.nonzero(hits.kind == MESHES)[0]
         if len(on_mesh):
-            out[on_mesh] = self._shade(on_mesh, hits, dirs, u)
+            out[on_mesh] = self._shade(on_mesh, hits, dirs, u, depth, medium)
             if mirrors and self.mirrors:
                 out[on_mesh] += self.mirrors.radiance(self, on_mesh, hits, origin, dirs, u)
+        if medium is not None:  # Beer–Lambert over the way to the hit (a miss: the whole way out)
+            distance = np.where(miss, np.inf, hits.t)[:, None]
+            sigma = medium[:, :3]
+            out *= np.exp(-sigma * np.where(sigma > 0, distance, 0.0))
         return out
 
     def _escaped(self, dirs: np.ndarray) -> np.ndarray:
@@ -235,7 +247,8 @@ class MonteCarloReference:
         return out
 
     # ------------------------------------------------------------------------------------------- shading
-    def _shade(self, idx: np.ndarray, hits, dirs: np.ndarray, u: np.ndarray) -> np.ndarray:
+    def _shade(self, idx: np.ndarray, hits, dirs: np.ndarray, u: np.ndarray, depth: int = 0,
+               medium: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
         geo = self.geometry
         surf = geo.surface(hits.prim[idx], hits.u[idx], hits.v[idx], dirs[idx])
         result = np.zeros((len(idx), 3))
@@ -245,6 +258,9 @@ class MonteCarloReference:
         wo_world = -dirs[idx]
         wo = np.einsum("nij,nj->ni", to_local, wo_world)
         origin = x + geo.epsilon * surf.geometric_normal
+        if self.transmission:  # before u is narrowed to these hits: the continued paths take theirs
+            column = self.crossing_column + NUMBERS_PER_CROSSING * depth
+            result += self.transmission.radiance(self, idx, surf, bound, wo, u, depth, medium, column)
         u = u[idx]
 
         def brdf(wi_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

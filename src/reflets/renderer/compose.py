@@ -124,7 +124,7 @@ def pass_plan(scene: Scene, area_method: str) -> list[tuple[str, Scene, frozense
             order = min(get_technique(m).auto_order for m in mapping.values()) + 0.5
             entries.append((order, area_method, _with_lights(scene, rest), meshes, drawn))
     brdf_meshes = frozenset(groups.get((), ()))
-    blended = frozenset(i for i in brdf_meshes if scene.materials[scene.mesh[i].material].blended)
+    blended = frozenset(i for i in brdf_meshes if scene.materials[scene.mesh[i].material].see_through)
     if blended and any(entry[0] > 2 for entry in entries):  # a later pass (Fermat's) must be behind them
         entries.append((4, area_method, scene, blended, False))
         brdf_meshes -= blended
@@ -200,7 +200,7 @@ class Auto(Technique):
         self.prepared = PreparedScene(self.ctx, scene, shadow_settings(p))
         # the emitters and the background: the last pass but a pass of blended meshes only (it draws over them; a
         # reflecting pass before it does its reflections only as the extras' pass)
-        blended = [bool(meshes) and all(scene.materials[scene.mesh[i].material].blended for i in meshes)
+        blended = [bool(meshes) and all(scene.materials[scene.mesh[i].material].see_through for i in meshes)
                    for _, _, meshes, _ in plan]  # fmt: skip
         extras = max((k for k in range(len(plan)) if not blended[k]), default=len(plan) - 1)  # all blended: the one
         for k, (method, pass_scene, meshes, additive) in enumerate(plan):

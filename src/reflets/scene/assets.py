@@ -13,7 +13,8 @@ What becomes what (docs/assets.md has the full table):
 - materials → ``type = "gltf"`` (Appendix B) with their textures (``TextureRef``: the glTF file and the image
   index, the sampler's wrap modes and filter, ``KHR_texture_transform``), ``KHR_materials_emissive_strength``,
   ``KHR_materials_clearcoat``, ``KHR_materials_sheen``, ``KHR_materials_ior``, ``KHR_materials_specular``,
-  ``KHR_materials_unlit``; any other material extension → a warning naming it (its base material is rendered);
+  ``KHR_materials_unlit``, ``KHR_materials_anisotropy``, ``KHR_materials_transmission``, ``KHR_materials_volume``;
+  any other material extension → a warning naming it (its base material is rendered);
 - cameras → ``Camera`` (perspective, or orthographic with ``ortho_height`` = 2 ymag and the aspect xmag / ymag;
   ``--camera K`` picks one; default the first, else one framing the bounding box);
 - ``KHR_lights_punctual`` → point / directional lights, photometric units converted to radiometric ones at
@@ -45,7 +46,8 @@ LUMINOUS_EFFICACY = 683.0
 #: material extensions read into the ``gltf`` material
 SUPPORTED_MATERIAL_EXTENSIONS = {"KHR_materials_emissive_strength", "KHR_texture_transform", "KHR_materials_clearcoat",
                                  "KHR_materials_sheen", "KHR_materials_ior", "KHR_materials_unlit",
-                                 "KHR_materials_specular", "KHR_materials_anisotropy"}  # fmt: skip
+                                 "KHR_materials_specular", "KHR_materials_anisotropy", "KHR_materials_transmission",
+                                 "KHR_materials_volume"}  # fmt: skip
 WRAPS = {10497: "repeat", 33071: "clamp", 33648: "mirror"}
 NEAREST_FILTERS = {9728, 9984, 9986}  # NEAREST, NEAREST_MIPMAP_NEAREST, NEAREST_MIPMAP_LINEAR (mag / min)
 
@@ -213,6 +215,11 @@ def _material(gltf: GltfFile, index: int, warnings: list[str], left_out: dict[st
     if "KHR_materials_anisotropy" in extensions:
         out |= _anisotropy(gltf, extensions["KHR_materials_anisotropy"],
                            f"{where}.extensions.KHR_materials_anisotropy", warnings)  # fmt: skip
+    if "KHR_materials_transmission" in extensions:
+        out |= _transmission(gltf, extensions["KHR_materials_transmission"],
+                             f"{where}.extensions.KHR_materials_transmission", warnings)  # fmt: skip
+    if "KHR_materials_volume" in extensions:
+        out |= _volume(gltf, extensions["KHR_materials_volume"], f"{where}.extensions.KHR_materials_volume", warnings)
     mode = (m.alphaMode or "OPAQUE").lower()
     out["alpha_mode"] = mode if mode in ("opaque", "mask", "blend") else "opaque"
     if m.alphaCutoff is not None:
@@ -280,6 +287,26 @@ def _anisotropy(gltf: GltfFile, anisotropy, where: str, warnings: list[str]) -> 
         "anisotropy_strength": anisotropy.get("anisotropyStrength", 0.0),
         "anisotropy_rotation": anisotropy.get("anisotropyRotation", 0.0),
         "anisotropy_texture": _texture(gltf, info("anisotropyTexture"), where + ".anisotropyTexture", warnings),
+    }
+
+
+def _transmission(gltf: GltfFile, transmission, where: str, warnings: list[str]) -> dict:
+    """KHR_materials_transmission's weight (its texture's R)."""
+    info = _extension_textures(gltf, transmission, where)
+    return {
+        "transmission": transmission.get("transmissionFactor", 0.0),
+        "transmission_texture": _texture(gltf, info("transmissionTexture"), where + ".transmissionTexture", warnings),
+    }
+
+
+def _volume(gltf: GltfFile, volume, where: str, warnings: list[str]) -> dict:
+    """KHR_materials_volume's thickness (its texture's G) and attenuation (glTF's infinite distance: none)."""
+    info = _extension_textures(gltf, volume, where)
+    return {
+        "thickness": volume.get("thicknessFactor", 0.0),
+        "thickness_texture": _texture(gltf, info("thicknessTexture"), where + ".thicknessTexture", warnings),
+        "attenuation_distance": volume.get("attenuationDistance"),
+        "attenuation_color": volume.get("attenuationColor", (1.0, 1.0, 1.0)),
     }
 
 

@@ -39,6 +39,18 @@ def mesh_data(scene: Scene, index: int) -> MeshData:
     return data
 
 
+def mesh_scale(scene: Scene, index: int) -> float:
+    """World units per unit of the mesh's own coordinates (the cube root of its transform's |det|, a glTF part's
+    node transform included): KHR_materials_volume's thickness is given in the mesh's units."""
+    mesh = scene.mesh[index]
+    linear = mesh.transform.matrix()[:3, :3]
+    if isinstance(mesh, FileMesh) and mesh.part is not None and mesh.file.suffix.lower() in (".gltf", ".glb"):
+        from .assets import read_gltf
+
+        linear = linear @ read_gltf(scene.resolve(mesh.file)).instances[mesh.part].matrix[:3, :3]
+    return float(abs(np.linalg.det(linear)) ** (1.0 / 3.0))
+
+
 def _mesh_key(scene: Scene, index: int) -> tuple | None:
     mesh = scene.mesh[index]
     files = []

@@ -36,11 +36,12 @@ from pydantic import Field
 from ..equirect import rotation_y
 from ..errors import ArgumentError
 from ..gpu import FrameTimer, ProgramSpec, depth, get_program, release_objects, set_uniforms
+from ..gpu.targets import HDRTarget
 from ..resources import check, fitting_size, largest_fitting
 from ..scene.camera import projection_matrix, view_eye
 from ..scene.emitters import area_light_samples, polygon_normal
 from ..scene.environment import environment_grid
-from ..scene.geometry import camera_range
+from ..scene.geometry import camera_range, mesh_scale
 from ..scene.lightmask import mask_lookup
 from ..scene.meshdata import MeshData
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
@@ -204,7 +205,8 @@ class MeshDraw(NamedTuple):
     shading: MaterialShading | None
     depth_vao: object
     filtered: list
-    centre: np.ndarray | None = None  # a blended mesh's bounding-box centre (the back-to-front order); else None
+    centre: np.ndarray | None = None  # a see-through mesh's bounding-box centre (the back-to-front order); else None
+    transmission: int = 0  # its material's BRDF_GLTF_TRANSMISSION (1: thin-walled, 2: a volume; 0: none)
 
 
 @register_technique
@@ -331,10 +333,14 @@ class Forward(Technique):
         # a context's renderers, each with its own texture_anisotropy
         filtered = [texture for texture in textures.values() if texture.filter[0] == moderngl.LINEAR_MIPMAP_LINEAR]
         early = (self.depth_prepass and material.textured and spec.vertex == MESH_VERT and not material.cutout
-                 and not self.role.additive)  # fmt: skip
+                 and not material.see_through and not self.role.additive)  # fmt: skip
         depth_vao = self.mesh_vertex_array(get_program(ctx, DEPTH_PROGRAM), index) if early else None
-        centre = self.prepared.boxes[index].mean(axis=0) if material.blended else None
-        return MeshDraw(program, vao, uniforms, textures, own_textures, shading, depth_vao, filtered, centre)
+        centre = self.prepared.boxes[index].mean(axis=0) if material.see_through else None
+        transmission = material.flags().get("BRDF_GLTF_TRANSMISSION", 0) if shading is None else 0
+        if transmission:
+            uniforms["u_thickness_scale"] = mesh_scale(self.scene, index)
+        return MeshDraw(program, vao, uniforms, textures, own_textures, shading, depth_vao, filtered, centre,
+                        transmission)  # fmt: skip
 
     # ------------------------------------------------------------------ how this technique shades
     def material_shadings(self, scene: Scene) -> list[MaterialShading]:
@@ -522,15 +528,15 @@ class Forward(Technique):
         if role.extras:
             self._draw_extras(vp_bytes, view_proj, radiance and color is None)
         if self._blended:
-            self._draw_blended(eye, per_frame, frame, seed)
+            self._draw_blended(target, eye, view_proj, per_frame, frame, seed)
         ctx.disable(ctx.DEPTH_TEST)
 
-    def _draw_mesh(self, draw: MeshDraw, per_frame: dict, frame: int, seed: int) -> None:
+    def _draw_mesh(self, draw: MeshDraw, per_frame: dict, frame: int, seed: int, extra: dict | None = None) -> None:
         for texture in draw.filtered:  # shared textures: set once (each set binds the texture)
             if texture.anisotropy != self.params.texture_anisotropy:
                 texture.anisotropy = self.params.texture_anisotropy
         samplers = {}
-        textures = {**draw.material_textures, **draw.own_textures}
+        textures = {**draw.material_textures, **draw.own_textures, **(extra or {})}
         for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
             texture.use(unit)
             samplers[name] = unit
@@ -538,17 +544,45 @@ class Forward(Technique):
         set_uniforms(draw.program, {**draw.uniforms, **samplers, **per_frame, **shading_frame})
         draw.vao.render()
 
-    def _draw_blended(self, eye, per_frame: dict, frame: int, seed: int) -> None:
-        """glTF BLEND surfaces over everything drawn (the background included), farthest first by their bounding
+    def _draw_blended(self, target, eye, view_proj, per_frame: dict, frame: int, seed: int) -> None:
+        """See-through surfaces over everything drawn (the background included), farthest first by their bounding
         boxes' centres (a mesh's own triangles unsorted, as three.js and Filament draw them), their depths written
-        as three.js does."""
-        ctx = self.ctx  # never an additive pass: a blended (glTF) material's meshes are the BRDF pass's
-        ctx.enable(ctx.BLEND)
-        ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE  # a L + (1-a) L
+        as three.js does: glTF BLEND ones blended by their coverage; transmissive ones (transmission.glsl) reading
+        a copy of the frame drawn so far — a thin-walled mesh's far side first, copied again, then its near side
+        (both are surfaces the light crosses); a volume's near side only (its far side is the volume's exit)."""
+        ctx = self.ctx  # never an additive pass: a see-through (glTF) material's meshes are the BRDF pass's
         distance = {k: float(np.linalg.norm(self._shaded[k].centre - eye)) for k in self._blended}
         for k in sorted(self._blended, key=distance.get, reverse=True):
-            self._draw_mesh(self._shaded[k], per_frame, frame, seed)
-        ctx.disable(ctx.BLEND)
+            draw = self._shaded[k]
+            if not draw.transmission:
+                ctx.enable(ctx.BLEND)  # a L + (1 - a) L_behind
+                ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE
+                self._draw_mesh(draw, per_frame, frame, seed)
+                ctx.disable(ctx.BLEND)
+                continue
+            inverse = np.linalg.inv(view_proj).T.astype(np.float32).tobytes()
+            ctx.enable(ctx.CULL_FACE)
+            for culled in ("front", "back") if draw.transmission == 1 else ("back",):
+                behind = self._behind_copy(target)
+                ctx.cull_face = culled
+                self._draw_mesh(draw, {**per_frame, "u_inv_view_proj": inverse}, frame, seed,
+                                {"u_behind": behind.color, "u_behind_depth": behind.depth})  # fmt: skip
+            ctx.disable(ctx.CULL_FACE)
+
+    def _behind_copy(self, target):
+        """The frame drawn so far (colour with its mips, and depth), for a transmissive surface to read."""
+        behind = getattr(self, "_behind", None)
+        if behind is None or behind.size != target.size:
+            if behind is not None:
+                behind.release()
+            behind = self._behind = HDRTarget(self.ctx, *target.size)
+            behind.color.filter = moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR
+            behind.depth.compare_func = ""  # read as numbers, not compared
+            behind.depth.filter = moderngl.NEAREST, moderngl.NEAREST
+        self.ctx.copy_framebuffer(behind.fbo, target.fbo)
+        behind.color.build_mipmaps()
+        target.bind()
+        return behind
 
     def _draw_extras(self, vp_bytes: bytes, view_proj: np.ndarray, background: bool) -> None:
         """The area lights' emitting faces and the environment behind everything."""
@@ -614,6 +648,9 @@ class Forward(Technique):
             self.prepared.release()
         self._owns_prepared = False
         self._targets.release()
+        if getattr(self, "_behind", None) is not None:
+            self._behind.release()
+        self._behind = None
 
 
 def _aov(name: str, summary: str) -> type[Forward]:

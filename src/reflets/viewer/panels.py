@@ -52,6 +52,7 @@ COLOURS = {
     "emissive",
     "sheen_color",
     "specular_color",
+    "attenuation_color",
 }
 #: four-component fields edited as colours with alpha (glTF's base colour: alpha is coverage, in [0, 1])
 COLOURS_ALPHA = {"base_color"}

@@ -2,6 +2,7 @@
 // for every polygon light, the contribution of the method in slot AREA (area_light_contribution).
 #include BRDF
 #include "reflets/techniques/shaders/lights.glsl"
+#include "reflets/techniques/shaders/transmission.glsl"
 #include "reflets/arealights/shaders/polygon.glsl"
 #include "reflets/arealights/shaders/material_lobe.glsl"
 #include AREA
@@ -29,6 +30,9 @@ void main() {
     vec3 sum = direct_lighting(v_position, frame, wo);
 #ifdef MATERIAL_SURFACE
     sum += material_emission();
+#endif
+#if defined(BRDF_GLTF_TRANSMISSION) && BRDF_GLTF_TRANSMISSION
+    sum += transmitted_light(v_position, frame, wo);
 #endif
 #if N_POLYGONS > 0
     for (int i = 0; i < N_POLYGONS; ++i) {

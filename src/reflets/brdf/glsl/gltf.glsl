@@ -80,6 +80,18 @@ uniform sampler2D m_anisotropy_map;
 uniform mat3 m_anisotropy_map_uv;
 #endif
 // the split sum's table of this BRDF (reflets/brdf/gltf.py, ibl_table): (A, B, P, E_sheen) at (mu, roughness)
+#if BRDF_GLTF_TRANSMISSION
+uniform vec3 m_transmission;         // KHR_materials_transmission's factor, KHR_materials_volume's thickness, ior
+uniform vec3 m_absorption;           // the volume's sigma (per world unit): -ln(attenuation colour) / distance
+#endif
+#if BRDF_GLTF_TRANSMISSION_MAP
+uniform sampler2D m_transmission_map;
+uniform mat3 m_transmission_map_uv;
+#endif
+#if BRDF_GLTF_THICKNESS_MAP
+uniform sampler2D m_thickness_map;
+uniform mat3 m_thickness_map_uv;
+#endif
 uniform sampler2D m_ibl_lut;
 
 // the parameters at this fragment (material_surface sets them)
@@ -99,6 +111,8 @@ float g_specular = 1.0;
 vec3 g_sheen = vec3(0.0);            // the sheen: colour and roughness (at least 0.07, as gltf.py)
 float g_sheen_roughness = 0.07;
 vec3 g_anisotropy = vec3(1.0, 0.0, 0.0);  // the lobe's direction (cos, sin) in the shading frame, strength^2
+float g_transmission = 0.0;          // the share of the diffuse lobe transmitted, and the volume's thickness
+float g_thickness = 0.0;
 
 vec4 gltf_texel(sampler2D map, mat3 to_image, vec2 uv) {
     return texture(map, (to_image * vec3(uv, 1.0)).xy);
@@ -192,6 +206,16 @@ void material_surface(vec4 uvs, inout mat3 frame) {
     direction = mat2(m_anisotropy.x, m_anisotropy.y, -m_anisotropy.y, m_anisotropy.x) * direction;  // turned
     float length_ = length(direction);
     g_anisotropy = vec3(length_ > 1e-6 ? direction / length_ : vec2(1.0, 0.0), strength * strength);
+#endif
+#if BRDF_GLTF_TRANSMISSION
+    g_transmission = m_transmission.x;
+#if BRDF_GLTF_TRANSMISSION_MAP
+    g_transmission *= gltf_texel(m_transmission_map, m_transmission_map_uv, GLTF_UV(BRDF_GLTF_TRANSMISSION_MAP)).r;
+#endif
+    g_thickness = m_transmission.y;
+#if BRDF_GLTF_THICKNESS_MAP
+    g_thickness *= gltf_texel(m_thickness_map, m_thickness_map_uv, GLTF_UV(BRDF_GLTF_THICKNESS_MAP)).g;
+#endif
 #endif
 }
 
@@ -307,7 +331,8 @@ void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, o
     vec3 abp = texture(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), sqrt(lobe_alpha))).rgb;
     specular_albedo = mix(g_specular * (g_f0 * abp.x + abp.y), g_base * abp.x + abp.y, g_metallic);
     float f0_max = max(g_f0.r, max(g_f0.g, g_f0.b));  // max(F) = max(F0) + (1 - max(F0)) s: F grows with F0
-    diffuse_albedo = (1.0 - g_metallic) * g_base * (1.0 - g_specular * (f0_max + (1.0 - f0_max) * abp.z));
+    diffuse_albedo = (1.0 - g_metallic) * (1.0 - g_transmission) * g_base
+                     * (1.0 - g_specular * (f0_max + (1.0 - f0_max) * abp.z));
     alpha = lobe_alpha;
 #if BRDF_GLTF_SHEEN
     float sheen_albedo = gltf_sheen_albedo(mu);
@@ -316,6 +341,31 @@ void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, o
     diffuse_albedo = diffuse_albedo * scaling + g_sheen * sheen_albedo;
 #endif
 }
+
+#if BRDF_GLTF_TRANSMISSION
+// What the surface lets through of the light behind it (KHR_materials_transmission), in the split sum's terms: the
+// transmission lobe is the reflection's GGX lobe mirrored through the surface, so its albedo is that lobe's with
+// F = 1 (A + B of the table) less what the Fresnel reflects, w (F0 A + B), tinted by the base colour, weighted by
+// (1 - m) t and by the layers above (1 - c F_c, 1 - max(C) E). Returns the weight and the lobe's alpha.
+vec3 material_transmission(mat3 frame, vec3 v, out float alpha) {
+    float mu = clamp(dot(frame[2], v), 0.0, 1.0);
+    alpha = g_alpha;
+#if BRDF_GLTF_ANISOTROPY
+    alpha = sqrt(g_alpha * mix(g_alpha, 1.0, g_anisotropy.z));
+#endif
+    vec3 abp = texture(m_ibl_lut, vec2(mu, sqrt(alpha))).rgb;
+    float f0 = max(g_f0.r, max(g_f0.g, g_f0.b));
+    vec3 weight = (1.0 - g_metallic) * g_transmission * g_base * max(abp.x + abp.y - g_specular * (f0 * abp.x + abp.y), 0.0);
+#if BRDF_GLTF_SHEEN
+    weight *= max(1.0 - max(g_sheen.r, max(g_sheen.g, g_sheen.b)) * gltf_sheen_albedo(mu), 0.0);
+#endif
+#if BRDF_GLTF_COAT
+    float coat_mu = clamp(dot(frame * g_coat_n, v), 0.0, 1.0);
+    weight *= 1.0 - g_coat * (0.04 + 0.96 * pow(1.0 - coat_mu, 5.0));
+#endif
+    return weight;
+}
+#endif
 
 #if BRDF_GLTF_COAT
 // The coat's share of the environment's light: weight c F_c(v), its world normal, alpha_c and the lobe's albedo
@@ -375,7 +425,7 @@ vec3 brdf_eval(vec3 wo, vec3 wi) {
 #endif
     float dv = gltf_d(hl, a) / ((1.0 + gltf_lambda(wol, a) + gltf_lambda(wil, a)) * 4.0 * wo.z * wi.z);
     vec3 f_d = g_f0 + (1.0 - g_f0) * schlick;  // Khronos' fresnel_mix: tinted, weighted by g_specular
-    float diffuse_weight = 1.0 - g_specular * max(f_d.r, max(f_d.g, f_d.b));
+    float diffuse_weight = (1.0 - g_specular * max(f_d.r, max(f_d.g, f_d.b))) * (1.0 - g_transmission);
     vec3 f_m = g_base + (1.0 - g_base) * schlick;
     vec3 value = (1.0 - g_metallic) * (diffuse_weight * g_base * INV_PI + g_specular * f_d * dv) + g_metallic * f_m * dv;
 #if BRDF_GLTF_SHEEN

@@ -1,6 +1,7 @@
 // Provides the forward shading pass: one BRDF (slot BRDF) lit by every light, or a geometry AOV (OUTPUT).
 #include BRDF
 #include "reflets/techniques/shaders/lights.glsl"
+#include "reflets/techniques/shaders/transmission.glsl"
 
 in vec3 v_position;
 in vec3 v_normal;
@@ -34,6 +35,9 @@ void main() {
 #ifdef MATERIAL_SURFACE
     radiance += material_emission();
     alpha = material_alpha();  // a blended surface: the weight of its radiance over what lies behind it
+#endif
+#if defined(BRDF_GLTF_TRANSMISSION) && BRDF_GLTF_TRANSMISSION
+    radiance += transmitted_light(v_position, frame, wo);
 #endif
     f_color = vec4(radiance, alpha);
 #endif
