@@ -580,7 +580,8 @@ def test_gltf_features_principled_cannot_express_are_refused_in_one_line(tmp_pat
 
     for change, word in [({"clearcoat": 0.5}, "clear coat"), ({"sheen_color": (1, 1, 1)}, "sheen"),
                          ({"anisotropy_strength": 0.5}, "anisotropy"), ({"unlit": True}, "unlit"),
-                         ({"alpha_mode": "mask"}, "MASK"), ({"specular": 0.5}, "KHR_materials_specular")]:  # fmt: skip
+                         ({"alpha_mode": "mask"}, "MASK"), ({"specular": 0.5}, "KHR_materials_specular"),
+                         ({"transmission": 1.0}, "transmission")]:  # fmt: skip
         with pytest.raises(SceneError, match=word) as info:
             material_to_mitsuba("g", Gltf(**change))
         assert "\n" not in str(info.value) and "materials.g" in str(info.value.field)

@@ -233,6 +233,7 @@ def _gltf_to_mitsuba(name: str, m) -> dict[str, Any]:
                (m.specular != 1.0 or tuple(m.specular_color) != (1.0, 1.0, 1.0) or m.specular_texture is not None
                 or m.specular_color_texture is not None, "KHR_materials_specular"),
                (m.ior == 0, "ior 0"),
+               (m.transmissive, "transmission (KHR_materials_transmission / volume)"),
                (any(getattr(m, f) is not None and getattr(m, f).uv for f in _GLTF_MAPS), "a second uv set"),
                (any(getattr(m, f) is not None for f in _GLTF_OTHER_MAPS), "an extension's texture")]  # fmt: skip
     for found, what in refused:
@@ -256,7 +257,8 @@ def _gltf_to_mitsuba(name: str, m) -> dict[str, Any]:
 #: only in the real-time renderer, and the references trace the occlusion itself)
 _GLTF_MAPS = ("base_color_texture", "metallic_roughness_texture", "normal_texture", "emissive_texture")
 _GLTF_OTHER_MAPS = ("clearcoat_texture", "clearcoat_roughness_texture", "clearcoat_normal_texture",
-                    "sheen_color_texture", "sheen_roughness_texture", "anisotropy_texture")  # fmt: skip
+                    "sheen_color_texture", "sheen_roughness_texture", "anisotropy_texture", "transmission_texture",
+                    "thickness_texture")  # fmt: skip
 
 
 def _gltf_map(m, field: str, factor, channel, name: str):

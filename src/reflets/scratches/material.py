@@ -203,6 +203,8 @@ class Scratched(Oriented, Material):
             raise ValueError('fresnel = "none" takes neither conductor nor ior')
         if self.base.cutout:  # the scratches pass neither cuts nor blends
             raise ValueError(f'a glTF base must be opaque (alpha_mode "{self.base.alpha_mode}" is not taken here)')
+        if getattr(self.base, "transmissive", False):  # nor draws what lies behind
+            raise ValueError("a glTF base must be opaque (a transmission factor is not taken here)")
         return self
 
     # ------------------------------------------------------------------------------------------ parameters
