@@ -282,7 +282,7 @@ def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path,
 
     from .imageio import atomic_write, check_output_path
     from .scene.assets import LUMINOUS_EFFICACY
-    from .scene.geometry import bounding_boxes, mesh_data
+    from .scene.geometry import bounding_boxes, mesh_data, mesh_scale
 
     path = check_output_path(path, (".glb",))
     if path.exists() and not overwrite:
@@ -325,8 +325,10 @@ def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path,
     for index, mesh in enumerate(scene.mesh):
         data = mesh_data(scene, index)
         points.append(data.positions)
+        # a volume's thickness is in its mesh's units: such a mesh keeps its scale on its node (world = s × local)
+        scale = mesh_scale(scene, index) if getattr(scene.materials[mesh.material], "volumetric", False) else 1.0
         attributes = g.Attributes(
-            POSITION=add(data.positions.astype(np.float32), g.ARRAY_BUFFER, g.VEC3, g.FLOAT, bounds=True),
+            POSITION=add((data.positions / scale).astype(np.float32), g.ARRAY_BUFFER, g.VEC3, g.FLOAT, bounds=True),
             NORMAL=add(data.normals.astype(np.float32), g.ARRAY_BUFFER, g.VEC3, g.FLOAT),
             TANGENT=add(data.tangents.astype(np.float32), g.ARRAY_BUFFER, g.VEC4, g.FLOAT),
             TEXCOORD_0=add(
@@ -340,7 +342,8 @@ def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path,
         indices = add(data.indices.astype(np.uint32).ravel(), g.ELEMENT_ARRAY_BUFFER, g.SCALAR, g.UNSIGNED_INT)
         primitive = g.Primitive(attributes=attributes, indices=indices, material=names.index(mesh.material))
         meshes.append(g.Mesh(name=mesh.name or f"mesh[{index}]", primitives=[primitive]))
-        nodes.append(g.Node(name=mesh.name or f"mesh[{index}]", mesh=len(meshes) - 1))
+        nodes.append(g.Node(name=mesh.name or f"mesh[{index}]", mesh=len(meshes) - 1,
+                            scale=[scale] * 3 if scale != 1.0 else None))  # fmt: skip
     lights = []
     for index, light in enumerate(scene.light):
         if light.type in ("point", "directional"):

@@ -89,3 +89,22 @@ def test_attenuation_test_reads_its_volumes():
     assert sum(m.thickness_texture is not None for m in volumes) == 1
     thin = [m for m in scene.materials.values() if m.type == "gltf" and m.transmissive and not m.volumetric]
     assert len(thin) == 5
+
+
+def test_a_volumes_scale_survives_export_and_an_ior_of_0_is_refused(tmp_path):
+    """The thickness is in the mesh's units: an exported volume keeps its mesh's scale on its node (AttenuationTest's
+    node-scale row: 0.25 to 2)."""
+    import pytest
+    from pydantic import ValidationError
+
+    from reflets.brdf.gltf import Gltf
+    from reflets.gltf import export_gltf
+    from reflets.scene.geometry import mesh_scale
+
+    scene = reflets.load_scene(DATA / "AttenuationTest" / "AttenuationTest.glb")
+    again = reflets.load_scene(export_gltf(scene, tmp_path / "out.glb")[0])
+    scales = [[round(mesh_scale(s, i), 6) for i, m in enumerate(s.mesh) if s.materials[m.material].volumetric]
+              for s in (scene, again)]  # fmt: skip
+    assert scales[0] == scales[1] and len(set(scales[0])) > 3
+    with pytest.raises(ValidationError, match="ior"):
+        Gltf(transmission=1.0, thickness=1.0, ior=0.0)

@@ -71,7 +71,7 @@ from pathlib import Path
 from typing import Annotated, ClassVar, Literal
 
 import numpy as np
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_validator
 
 from ..cache import Cache, source_hash
 from ..quantities import NonNeg
@@ -389,6 +389,12 @@ class Gltf(Material):
             raise ValueError("must be at least 1, or 0 (KHR_materials_ior: a Fresnel of 1 everywhere)")
         return value
 
+    @model_validator(mode="after")
+    def _volume(self) -> Gltf:
+        if self.volumetric and self.ior == 0:
+            raise ValueError("a volume (thickness > 0 with transmission) needs an ior of at least 1, not 0")
+        return self
+
     @property
     def alpha(self) -> float:
         return max(self.roughness * self.roughness, MIN_ALPHA)
@@ -525,11 +531,6 @@ class Gltf(Material):
     def see_through(self) -> bool:
         return self.blended or self.transmissive
 
-    def thickness_at(self, uv: np.ndarray) -> np.ndarray:
-        """KHR_materials_volume's thickness (N,) at mesh uv, in the mesh's units: the factor × G of its texture."""
-        out = np.full(len(uv), float(self.thickness))
-        texels = self._lookup("thickness_texture", uv)
-        return out if texels is None else out * texels[:, 1]
 
     def holes(self, uv: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Where rays go through (N,) at mesh uv, given uniform numbers ``u`` (N,): a cut-out's coverage under

@@ -14,8 +14,8 @@ weight of the surface's transmission lobe:
   exp(−σ d) (σ from ``attenuation_color`` / ``attenuation_distance``), and at the next surface it meets leaves by
   refraction with probability 1 − F or reflects back inside with probability F (total internal reflection:
   always), F Schlick's at the transmitted side's cosine. The base colour tints once, where the path enters (as
-  Khronos' sample viewer). The η² radiance scaling of crossing an interface cancels over the way in and out and is
-  left out.
+  Khronos' sample viewer). The η² radiance scaling of crossing an interface is left out (it cancels over a way in
+  and out; not for light met inside the volume, an emitter or an object there).
 
 Neither renderer carries light *to* other surfaces through a transmissive one: its shadow is opaque (a caustic
 or a coloured shadow is not direct lighting), and lights are not seen through a rough surface's lobe by their own
@@ -110,7 +110,9 @@ def _crossing(material, points, wo, u1, u2, u3, inside):
     cos_t = np.sqrt(np.maximum(1.0 - sin2_t, 0.0))
     refracted = -eta[:, None] * wo + (eta * cos_i - cos_t)[:, None] * h
     absorption = np.broadcast_to(np.append(material.absorption, 1.0), (n, 4))
-    # entering: refract, the reflection being the BRDF's; inside: leave with 1 − F, else reflect back in
+    # entering: refract, the reflection being the BRDF's; inside: leave with 1 − F (the ior's F₀, untinted: the
+    # GLSL twin's), else reflect back in
+    f0 = np.where(inside, material.dielectric_f0, f0)
     fresnel = f0 + (1.0 - f0) * (1.0 - np.where(inside, cos_t, cos_i)) ** 5
     stays = inside & (total | (u3 < fresnel))
     direction = np.where(stays[:, None], reflected, refracted)

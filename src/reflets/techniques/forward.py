@@ -175,6 +175,11 @@ def samples_per_pixel_side(spp: int) -> int:
     return s
 
 
+#: the texture units of a transmissive draw's frame copy (colour, depth): above the material textures (1–8), the
+#: shadow maps (10–16) and the prefiltered environment (17, 18)
+BEHIND_UNITS = (19, 20)
+
+
 @dataclass(frozen=True)
 class PassRole:
     """What a technique draws when a composed frame (``reflets.renderer.compose``) shares the target with
@@ -531,12 +536,12 @@ class Forward(Technique):
             self._draw_blended(target, eye, view_proj, per_frame, frame, seed)
         ctx.disable(ctx.DEPTH_TEST)
 
-    def _draw_mesh(self, draw: MeshDraw, per_frame: dict, frame: int, seed: int, extra: dict | None = None) -> None:
+    def _draw_mesh(self, draw: MeshDraw, per_frame: dict, frame: int, seed: int) -> None:
         for texture in draw.filtered:  # shared textures: set once (each set binds the texture)
             if texture.anisotropy != self.params.texture_anisotropy:
                 texture.anisotropy = self.params.texture_anisotropy
         samplers = {}
-        textures = {**draw.material_textures, **draw.own_textures, **(extra or {})}
+        textures = {**draw.material_textures, **draw.own_textures}
         for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
             texture.use(unit)
             samplers[name] = unit
@@ -552,6 +557,7 @@ class Forward(Technique):
         (both are surfaces the light crosses); a volume's near side only (its far side is the volume's exit)."""
         ctx = self.ctx  # never an additive pass: a see-through (glTF) material's meshes are the BRDF pass's
         distance = {k: float(np.linalg.norm(self._shaded[k].centre - eye)) for k in self._blended}
+        inverse = None  # the inverse view-projection the transmissive draws read depths with
         for k in sorted(self._blended, key=distance.get, reverse=True):
             draw = self._shaded[k]
             if not draw.transmission:
@@ -560,13 +566,19 @@ class Forward(Technique):
                 self._draw_mesh(draw, per_frame, frame, seed)
                 ctx.disable(ctx.BLEND)
                 continue
-            inverse = np.linalg.inv(view_proj).T.astype(np.float32).tobytes()
+            inverse = inverse or np.linalg.inv(view_proj).T.astype(np.float32).tobytes()
             ctx.enable(ctx.CULL_FACE)
+            ctx.enable(ctx.BLEND)  # a transmissive BLEND surface over what lies behind it by its coverage (else a = 1)
+            ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE
             for culled in ("front", "back") if draw.transmission == 1 else ("back",):
                 behind = self._behind_copy(target)
+                behind.color.use(BEHIND_UNITS[0])
+                behind.depth.use(BEHIND_UNITS[1])
                 ctx.cull_face = culled
-                self._draw_mesh(draw, {**per_frame, "u_inv_view_proj": inverse}, frame, seed,
-                                {"u_behind": behind.color, "u_behind_depth": behind.depth})  # fmt: skip
+                self._draw_mesh(draw, {**per_frame, "u_inv_view_proj": inverse, "u_behind": BEHIND_UNITS[0],
+                                       "u_behind_depth": BEHIND_UNITS[1]}, frame, seed)  # fmt: skip
+            ctx.disable(ctx.BLEND)
+            ctx.cull_face = "back"
             ctx.disable(ctx.CULL_FACE)
 
     def _behind_copy(self, target):
@@ -579,6 +591,8 @@ class Forward(Technique):
             behind.color.filter = moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR
             behind.depth.compare_func = ""  # read as numbers, not compared
             behind.depth.filter = moderngl.NEAREST, moderngl.NEAREST
+            for texture in (behind.color, behind.depth):  # off the screen: its edge, not the other side
+                texture.repeat_x = texture.repeat_y = False
         self.ctx.copy_framebuffer(behind.fbo, target.fbo)
         behind.color.build_mipmaps()
         target.bind()
