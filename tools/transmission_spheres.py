@@ -15,11 +15,9 @@ import sys
 import tempfile
 import time
 
-import numpy as np
-from PIL import Image
-
 import reflets
 from reflets.bench.assets import block_means as blocks
+from reflets.bench.transmission import glass_scene
 from reflets.metrics import relmse
 
 W, H = 160, 120
@@ -37,22 +35,7 @@ CASES = {
 
 
 def scene(directory: str, shape: str = "sphere", **glass) -> reflets.Scene:
-    u, v = np.meshgrid(np.arange(64), np.arange(64))
-    checker = np.where((((u // 8) + (v // 8)) % 2 == 0)[..., None], [230, 200, 40], [40, 90, 230]).astype(np.uint8)
-    Image.fromarray(checker).save(f"{directory}/checker.png")
-    mesh = {"shape": shape, "material": "glass"} | ({"radius": 0.6} if shape == "sphere" else {})
-    return reflets.load_dict({
-        "camera": {"position": [0, 0.3, 3.0], "look_at": [0, 0, 0], "fov_y": 40, "size": [W, H]},
-        "materials": {"glass": {"type": "gltf", "metallic": 0.0, "transmission": 1.0} | glass,
-                      "wall": {"type": "gltf", "metallic": 0.0, "roughness": 0.8,
-                               "base_color_texture": {"texture": f"{directory}/checker.png"}}},
-        "mesh": [mesh,
-                 {"shape": "plane", "size": [6, 6], "material": "wall",
-                  "transform": {"rotate": [90, 0, 0], "translate": [0, 0, -1.5]}},
-                 {"shape": "plane", "size": [6, 6], "material": "wall", "transform": {"translate": [0, -0.8, 0]}}],
-        "light": [{"type": "point", "position": [1.5, 2.0, 2.0], "intensity": [6, 6, 6]},
-                  {"type": "directional", "direction": [-0.3, -1, -0.5], "irradiance": [1.0, 1.0, 1.0]}],
-    })  # fmt: skip
+    return glass_scene(directory, glass, shape, size=(W, H))
 
 
 def frame_times(scenes: list, frames: int = 12) -> list[float]:

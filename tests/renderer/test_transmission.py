@@ -7,9 +7,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
 
 import reflets
+from reflets.bench import transmission
 from reflets.bench.assets import block_means as blocks
 from reflets.metrics import relmse
 
@@ -18,26 +18,7 @@ DATA = Path(__file__).parents[1] / "data" / "gltf"
 
 
 def glass_scene(tmp_path, glass: dict, shape: str = "sphere", scale: float = 1.0) -> reflets.Scene:
-    """``glass`` (a glTF material) before a checker wall and floor; a point and a directional light."""
-    u, v = np.meshgrid(np.arange(64), np.arange(64))
-    checker = np.where((((u // 8) + (v // 8)) % 2 == 0)[..., None], [230, 200, 40], [40, 90, 230]).astype(np.uint8)
-    Image.fromarray(checker).save(tmp_path / "checker.png")
-    stripes = np.zeros((64, 64, 3), np.uint8)
-    stripes[..., 0] = np.where((u // 16) % 2 == 0, 255, 64)  # transmission in R
-    Image.fromarray(stripes).save(tmp_path / "stripes.png")
-    mesh = {"shape": shape, "material": "glass", "transform": {"scale": scale}}
-    return reflets.load_dict({
-        "camera": {"position": [0, 0.3, 3.0], "look_at": [0, 0, 0], "fov_y": 40, "size": [W, H]},
-        "materials": {"glass": {"type": "gltf", "metallic": 0.0, "transmission": 1.0} | glass,
-                      "wall": {"type": "gltf", "metallic": 0.0, "roughness": 0.8,
-                               "base_color_texture": {"texture": str(tmp_path / "checker.png")}}},
-        "mesh": [mesh | ({"radius": 0.6} if shape == "sphere" else {}),
-                 {"shape": "plane", "size": [6, 6], "material": "wall",
-                  "transform": {"rotate": [90, 0, 0], "translate": [0, 0, -1.5]}},
-                 {"shape": "plane", "size": [6, 6], "material": "wall", "transform": {"translate": [0, -0.8, 0]}}],
-        "light": [{"type": "point", "position": [1.5, 2.0, 2.0], "intensity": [6, 6, 6]},
-                  {"type": "directional", "direction": [-0.3, -1, -0.5], "irradiance": [1.0, 1.0, 1.0]}],
-    })  # fmt: skip
+    return transmission.glass_scene(tmp_path, glass, shape, scale, (W, H))
 
 
 def reference(scene, spp: int = 64) -> np.ndarray:
