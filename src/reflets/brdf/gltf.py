@@ -463,7 +463,7 @@ class Gltf(Material):
         path's Lambertian stand-in for it (a sphere under two quad lights against the reference: 0.06 % against
         0.73 %; docs/assets.md). An anisotropic lobe is read as the isotropic one of the same area (as by the split
         sum), so ``auto`` lights it by ``forward``."""
-        return self.textured or self.unlit or not self.sheened
+        return self.textured or self.unlit or self.transmissive or not self.sheened  # no table for a transmissive one
 
     def _anisotropy(self, direction: np.ndarray, strength: np.ndarray) -> np.ndarray:
         """(…, 3): the direction turned by ``anisotropy_rotation`` and made unit ((1, 0) where it is zero), s²."""
