@@ -436,7 +436,7 @@ class Gltf(Material):
 
     @property
     def tabulated(self) -> bool:
-        return not (self.textured or self.anisotropic or self.transmissive)
+        return not (self.textured or self.anisotropic)
 
     @property
     def transmissive(self) -> bool:
