@@ -64,6 +64,7 @@ from typing import Any
 
 import numpy as np
 
+from ..brdf.gltf import SLOTS as GLTF_SLOTS
 from ..errors import ArgumentError, RefletsError, SceneError
 from ..scene.geometry import bounding_boxes, camera_range, clip_planes, mesh_data
 from ..scene.lightmask import load_mask
@@ -256,9 +257,9 @@ def _gltf_to_mitsuba(name: str, m) -> dict[str, Any]:
 #: the gltf material's texture fields the bridge reads (an occlusion map is ignored: it occludes environment light
 #: only in the real-time renderer, and the references trace the occlusion itself)
 _GLTF_MAPS = ("base_color_texture", "metallic_roughness_texture", "normal_texture", "emissive_texture")
-_GLTF_OTHER_MAPS = ("clearcoat_texture", "clearcoat_roughness_texture", "clearcoat_normal_texture",
-                    "sheen_color_texture", "sheen_roughness_texture", "anisotropy_texture", "transmission_texture",
-                    "thickness_texture")  # fmt: skip
+#: the extensions' texture fields, refused (the specular ones with their extension, the occlusion map ignored)
+_NOT_OTHER = (*_GLTF_MAPS, "occlusion_texture", "specular_texture", "specular_color_texture")
+_GLTF_OTHER_MAPS = tuple(field for field, *_ in GLTF_SLOTS if field not in _NOT_OTHER)
 
 
 def _gltf_map(m, field: str, factor, channel, name: str):

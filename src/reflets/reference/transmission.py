@@ -29,6 +29,7 @@ import numpy as np
 
 from ..brdf.gltf import COAT_F0, sheen_albedo
 from ..brdf.microfacet import Distribution, smith_lambda_ggx
+from ..fresnel import fresnel_schlick
 
 #: the most transmissive surfaces one camera path crosses (a thin-walled sphere: 2; a glass sphere with a few
 #: internal reflections: 4 and more)
@@ -50,8 +51,7 @@ class Transmission:
                  medium: np.ndarray | None, first: int) -> np.ndarray:  # fmt: skip
         """Radiance through the surfaces at the hits ``idx`` (their shading ``surf``, ``bound`` materials and local
         ``wo``) × its weight; ``medium`` (N, 4): σ of the volume each path travels in and 1 (outside: None, or 0
-        there); ``first`` the
-        first column of this crossing's uniform numbers in ``u``."""
+        there); ``first`` the first column of this crossing's uniform numbers in ``u``."""
         n = len(idx)
         out = np.zeros((n, 3))
         if depth >= MAX_CROSSINGS:
@@ -90,7 +90,7 @@ def _crossing(material, points, wo, u1, u2, u3, inside):
     failed = np.isnan(h[:, 0]) | (wo[:, 2] <= 0)
     h = np.where(failed[:, None], [0.0, 0.0, 1.0], h)
     cos_i = np.clip(np.sum(wo * h, axis=-1), 0.0, 1.0)
-    f0 = np.broadcast_to(np.max(np.atleast_1d(points.f0), axis=-1) if np.ndim(points.f0) else points.f0, (n,))
+    f0 = np.broadcast_to(np.max(np.atleast_1d(points.f0), axis=-1), (n,))  # a scalar, (3,) or (N, 3)
     lam_o = smith_lambda_ggx(into(wo), at, ab)
 
     def g2_over_g1(w):  # the lobe's weight under visible-normal sampling (Λ depends on |cos θ| only)
@@ -101,8 +101,7 @@ def _crossing(material, points, wo, u1, u2, u3, inside):
     if not material.volumetric:  # thin-walled: the reflection lobe mirrored through the surface
         direction = reflected * np.array([1.0, 1.0, -1.0])
         valid = ~failed & (reflected[:, 2] > 0)
-        fresnel = f0 + (1.0 - f0) * (1.0 - cos_i) ** 5
-        weight = _surface_weight(points, wo, fresnel) * g2_over_g1(direction)[:, None]
+        weight = _surface_weight(points, wo, fresnel_schlick(cos_i, f0)) * g2_over_g1(direction)[:, None]
         return direction, np.where(valid[:, None], weight, 0.0), sigma
     eta = np.where(inside, material.ior, 1.0 / material.ior)  # incident over transmitted index
     sin2_t = eta * eta * (1.0 - cos_i * cos_i)
@@ -113,7 +112,7 @@ def _crossing(material, points, wo, u1, u2, u3, inside):
     # entering: refract, the reflection being the BRDF's; inside: leave with 1 − F (the ior's F₀, untinted: the
     # GLSL twin's), else reflect back in
     f0 = np.where(inside, material.dielectric_f0, f0)
-    fresnel = f0 + (1.0 - f0) * (1.0 - np.where(inside, cos_t, cos_i)) ** 5
+    fresnel = fresnel_schlick(np.where(inside, cos_t, cos_i), f0)
     stays = inside & (total | (u3 < fresnel))
     direction = np.where(stays[:, None], reflected, refracted)
     valid = ~failed & np.where(stays, reflected[:, 2] > 0, refracted[:, 2] < 0)
@@ -128,7 +127,7 @@ def _surface_weight(points, wo, fresnel):
     share = (1.0 - points.metallic) * points.transmission * (1.0 - w * fresnel)
     if points.coat is not None:
         nv = np.sum(points.coat_normal * wo, axis=-1)
-        share = share * (1.0 - points.coat * (COAT_F0 + (1.0 - COAT_F0) * (1.0 - np.clip(nv, 0.0, 1.0)) ** 5))
+        share = share * (1.0 - points.coat * fresnel_schlick(nv, COAT_F0))
     if points.sheen is not None:
         share = share * np.maximum(1.0 - np.max(points.sheen, axis=-1) * sheen_albedo(wo[:, 2], points.sheen_roughness),
                                    0.0)  # fmt: skip

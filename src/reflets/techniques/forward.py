@@ -36,7 +36,7 @@ from pydantic import Field
 from ..equirect import rotation_y
 from ..errors import ArgumentError
 from ..gpu import FrameTimer, ProgramSpec, depth, get_program, release_objects, set_uniforms
-from ..gpu.targets import HDRTarget
+from ..gpu.targets import TargetCache
 from ..resources import check, fitting_size, largest_fitting
 from ..scene.camera import projection_matrix, view_eye
 from ..scene.emitters import area_light_samples, polygon_normal
@@ -233,6 +233,10 @@ class Forward(Technique):
     #: GPU state shared with the other passes of a composed frame (``auto`` sets it before ``prepare``; None: the
     #: technique prepares and releases its own)
     shared: PreparedScene | None = None
+
+    def __init__(self, ctx, **params):
+        super().__init__(ctx, **params)
+        self._behind = TargetCache()  # the frame copy transmissive surfaces read (``_behind_copy``)
 
     def prepare(self, scene: Scene) -> None:
         ctx = self.ctx
@@ -558,18 +562,15 @@ class Forward(Technique):
         ctx = self.ctx  # never an additive pass: a see-through (glTF) material's meshes are the BRDF pass's
         distance = {k: float(np.linalg.norm(self._shaded[k].centre - eye)) for k in self._blended}
         inverse = None  # the inverse view-projection the transmissive draws read depths with
+        ctx.enable(ctx.BLEND)  # a L + (1 - a) L_behind (a transmissive surface: a = 1 unless it is BLEND too)
+        ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE
         for k in sorted(self._blended, key=distance.get, reverse=True):
             draw = self._shaded[k]
             if not draw.transmission:
-                ctx.enable(ctx.BLEND)  # a L + (1 - a) L_behind
-                ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE
                 self._draw_mesh(draw, per_frame, frame, seed)
-                ctx.disable(ctx.BLEND)
                 continue
             inverse = inverse or np.linalg.inv(view_proj).T.astype(np.float32).tobytes()
             ctx.enable(ctx.CULL_FACE)
-            ctx.enable(ctx.BLEND)  # a transmissive BLEND surface over what lies behind it by its coverage (else a = 1)
-            ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE
             for culled in ("front", "back") if draw.transmission == 1 else ("back",):
                 behind = self._behind_copy(target)
                 behind.color.use(BEHIND_UNITS[0])
@@ -577,17 +578,15 @@ class Forward(Technique):
                 ctx.cull_face = culled
                 self._draw_mesh(draw, {**per_frame, "u_inv_view_proj": inverse, "u_behind": BEHIND_UNITS[0],
                                        "u_behind_depth": BEHIND_UNITS[1]}, frame, seed)  # fmt: skip
-            ctx.disable(ctx.BLEND)
             ctx.cull_face = "back"
             ctx.disable(ctx.CULL_FACE)
+        ctx.disable(ctx.BLEND)
 
     def _behind_copy(self, target):
         """The frame drawn so far (colour with its mips, and depth), for a transmissive surface to read."""
-        behind = getattr(self, "_behind", None)
-        if behind is None or behind.size != target.size:
-            if behind is not None:
-                behind.release()
-            behind = self._behind = HDRTarget(self.ctx, *target.size)
+        fresh = self._behind.target is None or self._behind.target.size != target.size
+        behind = self._behind.get(self.ctx, *target.size)
+        if fresh:
             behind.color.filter = moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR
             behind.depth.compare_func = ""  # read as numbers, not compared
             behind.depth.filter = moderngl.NEAREST, moderngl.NEAREST
@@ -662,9 +661,7 @@ class Forward(Technique):
             self.prepared.release()
         self._owns_prepared = False
         self._targets.release()
-        if getattr(self, "_behind", None) is not None:
-            self._behind.release()
-        self._behind = None
+        self._behind.release()
 
 
 def _aov(name: str, summary: str) -> type[Forward]:

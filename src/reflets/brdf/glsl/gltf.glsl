@@ -311,6 +311,15 @@ float material_alpha() {
 #endif
 }
 
+// the base lobe's alpha as an isotropic lobe of the same area (the split sum's and the transmission's lookups)
+float gltf_lobe_alpha() {
+#if BRDF_GLTF_ANISOTROPY
+    return sqrt(g_alpha * mix(g_alpha, 1.0, g_anisotropy.z));
+#else
+    return g_alpha;
+#endif
+}
+
 // The environment's split sum for this BRDF: its specular directional albedo F0 A + B (Schlick: the dielectric's
 // w (F0 A + B), the metal's c A + B, mixed by metallic) and the dielectric's diffuse albedo
 // (1 - m) c (1 - w (F0 + (1 - F0) P)) (F0 its largest channel), P = the mean of (1 - v.h)^5 over the cosine-weighted
@@ -324,10 +333,7 @@ void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, o
     alpha = 1.0;
     return;
 #endif
-    float lobe_alpha = g_alpha;
-#if BRDF_GLTF_ANISOTROPY
-    lobe_alpha = sqrt(g_alpha * mix(g_alpha, 1.0, g_anisotropy.z));  // an isotropic lobe of the same area
-#endif
+    float lobe_alpha = gltf_lobe_alpha();
     vec3 abp = texture(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), sqrt(lobe_alpha))).rgb;
     specular_albedo = mix(g_specular * (g_f0 * abp.x + abp.y), g_base * abp.x + abp.y, g_metallic);
     float f0_max = max(g_f0.r, max(g_f0.g, g_f0.b));  // max(F) = max(F0) + (1 - max(F0)) s: F grows with F0
@@ -349,10 +355,7 @@ void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, o
 // (1 - m) t and by the layers above (1 - c F_c, 1 - max(C) E). Returns the weight and the lobe's alpha.
 vec3 material_transmission(mat3 frame, vec3 v, out float alpha) {
     float mu = clamp(dot(frame[2], v), 0.0, 1.0);
-    alpha = g_alpha;
-#if BRDF_GLTF_ANISOTROPY
-    alpha = sqrt(g_alpha * mix(g_alpha, 1.0, g_anisotropy.z));
-#endif
+    alpha = gltf_lobe_alpha();
     vec3 abp = texture(m_ibl_lut, vec2(mu, sqrt(alpha))).rgb;
     float f0 = max(g_f0.r, max(g_f0.g, g_f0.b));
     vec3 weight = (1.0 - g_metallic) * g_transmission * g_base * max(abp.x + abp.y - g_specular * (f0 * abp.x + abp.y), 0.0);

@@ -27,10 +27,9 @@ vec3 transmitted_light(vec3 x, mat3 frame, vec3 wo) {
     vec3 v = frame * wo;
     float alpha;
     vec3 weight = material_transmission(frame, v, alpha);
-    vec3 dir = -v;
     vec3 exit = x;
 #if BRDF_GLTF_TRANSMISSION == 2
-    dir = refract(-v, frame[2], 1.0 / m_transmission.z);
+    vec3 dir = refract(-v, frame[2], 1.0 / m_transmission.z);
     float travel = g_thickness * u_thickness_scale;
     exit = x + dir * travel;
     weight *= exp(-m_absorption * travel) * (1.0 - m_dielectric_f0);  // and leaving: the Fresnel at normal incidence
