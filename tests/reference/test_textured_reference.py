@@ -36,7 +36,7 @@ ASSETS = Path(__file__).parents[1] / "data" / "gltf"
         # coat, a felt floor at grazing angles (issue 28: ≤ 5 %); measured 0.01 %
         ("SheenTest", (160, 120), 16, (16, 0.05), 0.05),
         # alphaMode MASK at three cut-offs and BLEND: the holes and the blended surfaces seen through and shadowed
-        # through in both renderers
+        # through in both renderers; measured 0.12 % (python tools/asset_accuracy.py gives the same row)
         ("AlphaBlendModeTest", (160, 120), 16, (16, 0.05), 0.02),
     ],
 )
@@ -84,7 +84,7 @@ def test_specular_textures_match_the_reference(tmp_path):
     material = scene.materials["specular/velvet"]
     assert material.specular_texture is not None and material.specular_color == (1.0, 1.5, 2.0)
     error = asset_error(scene, (160, 120), spp=16, reference_spp=16, adaptive_error=0.05)
-    assert error["relmse"] <= 0.02, error  # measured 2.5e-5
+    assert error["relmse"] <= 2.5e-4, error  # measured 2.5e-5
     untinted_fields = {"specular_texture": None, "specular_color_texture": None, "specular_color": (1.0, 1.0, 1.0)}
     plain = {k: m.model_copy(update=untinted_fields) for k, m in scene.materials.items()}
     gpu = reflets.render(scene, size=(160, 120), spp=16)
@@ -127,7 +127,7 @@ def test_anisotropy_matches_the_reference(tmp_path):
     })  # fmt: skip
     gpu = reflets.render(scene, method="forward", spp=16)
     ref = reflets.reference(scene, spp=16, progress=False, adaptive_error=0.05).image
-    assert relmse(block_means(gpu), block_means(ref)) < 0.02  # measured 2.6e-4
+    assert relmse(block_means(gpu), block_means(ref)) < 2e-3  # measured 2.6e-4
     untextured = scene.model_copy(update={"materials": {**scene.materials, "brushed": scene.materials[
         "brushed"].model_copy(update={"anisotropy_texture": None})}})  # fmt: skip
     assert relmse(reflets.render(untextured, method="forward", spp=16), gpu) > 0.1  # measured 1.04

@@ -331,7 +331,7 @@ def test_textured_objects_are_textured_in_the_mirror(ctx, tmp_path):
     size = (200, 150)
     image = reflets.render(textured, method="fermat", size=size)
     ref = reflets.reference(textured, spp=1, size=size, progress=False)
-    assert relmse(image, ref.image) < 0.02
+    assert relmse(image, ref.image) < 5e-3  # measured 1.6e-3 (docs/assets.md)
     plain = reflets.load_scene(scenes_dir() / "40_reflect_teapot_sphere.toml")
     sphere = reflets.render(plain, method="position", size=size)
     on_sphere = np.linalg.norm(sphere - np.array([0.2, 0.7, -0.3]), axis=-1) < 0.71

@@ -40,7 +40,7 @@ def test_a_transmission_texture_and_a_tinted_base_colour(tmp_path):
              "transmission_texture": {"texture": str(tmp_path / "stripes.png")}}  # fmt: skip
     scene = glass_scene(tmp_path, glass, shape="cube")
     image, ref = reflets.render(scene, spp=16), reference(scene)
-    assert relmse(blocks(image), blocks(ref)) < 0.002  # measured 6.8e-5
+    assert relmse(blocks(image), blocks(ref)) < 5e-4  # measured 6.8e-5
     untextured = scene.model_copy(update={"materials": scene.materials | {
         "glass": scene.materials["glass"].model_copy(update={"transmission_texture": None})}})  # fmt: skip
     assert relmse(blocks(reflets.render(untextured, spp=16)), blocks(ref)) > 0.01  # measured 0.045

@@ -30,7 +30,7 @@ def test_scratches_over_a_textured_gltf_base(tmp_path):
     image = reflets.render(bare, method="scratches")
     alone = bare.model_copy(update={"materials": {"s": bare.materials["s"].base}})
     np.testing.assert_allclose(image, reflets.render(alone, method="forward"), rtol=1e-5, atol=1e-6)
-    assert relmse(image, reflets.reference(bare, spp=4, progress=False).image) < 1e-3  # measured 3e-7
+    assert relmse(image, reflets.reference(bare, spp=4, progress=False).image) < 3e-6  # measured 3e-7
     covered = scene(0.02)  # the reference's finite part: the textured base × its uncovered share, exactly
     weight = covered.materials["s"].base_weight()
     finite = reflets.reference(covered, spp=4, progress=False).image

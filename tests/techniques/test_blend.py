@@ -54,7 +54,7 @@ def test_a_blended_card_and_its_shadow_match_the_reference():
     })  # fmt: skip
     gpu = reflets.render(scene, method="forward", spp=4)
     ref = reflets.reference(scene, spp=64, progress=False).image
-    assert relmse(block_means(gpu), block_means(ref)) < 1e-3  # measured 3.3e-5
+    assert relmse(block_means(gpu), block_means(ref)) < 3e-4  # measured 3.3e-5
     solid = scene.model_copy(update={"materials": {**scene.materials, "card": scene.materials["card"].model_copy(
         update={"alpha_mode": "opaque"})}})  # fmt: skip
     assert relmse(reflets.render(solid, method="forward", spp=4), gpu) > 0.005  # the blending is seen: 0.019
