@@ -259,6 +259,24 @@ def material_to_gltf(name: str, material) -> tuple[dict, list[str]]:
     return gltf, notes
 
 
+def _mapped_colours(name: str, source, exported: dict, textures: _Textures) -> list[str]:
+    """A library material's mapped colours (``brdf.maps``) as the slots its exported factors went to: the colour
+    that became the base colour (the Lambertian albedo; a conductor's specular tint) its baseColorTexture, the
+    one that became KHR_materials_specular's tint its specularColorTexture (both sRGB, as glTF defines them)."""
+    notes: list[str] = []
+    conductor = source.type == "microfacet" and source.fresnel == "conductor"
+    specular = exported.get("extensions", {}).get(SPECULAR)
+    for field, ref in getattr(source, "maps", {}).items():
+        where = f"{name}.{field}"
+        if field == ("specular" if conductor else source.lambertian_field):
+            exported["pbrMetallicRoughness"]["baseColorTexture"] = textures.info(ref, True, where, notes)
+        elif specular is not None and not conductor:
+            specular["specularColorTexture"] = textures.info(ref, True, where, notes)
+        else:
+            notes.append(f"{where}: its texture has no glTF slot in this export (its factor is written alone)")
+    return notes
+
+
 def _gltf_camera(g, cam, boxes: np.ndarray):
     """The scene camera as a glTF camera (orthographic: xmag / ymag are half the view window's width / height, its
     required zfar the renderer's own: ``camera_range`` of the meshes' and emitters' boxes — a far plane beyond them
@@ -319,6 +337,7 @@ def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path,
                 found.insert(0, f"{name}: scratched, exported by its base BRDF (the scratch lobes have no glTF form)")
         else:
             exported, found = material_to_gltf(name, material)
+            found += _mapped_colours(name, source, exported, textures)
         materials.append(exported)
         notes += found
     meshes, nodes, points = [], [], []  # points: every exported vertex, for an orthographic camera's far plane

@@ -285,6 +285,16 @@ def load_texture(ref: TextureRef, role_srgb: bool) -> TextureData:
     return decoded
 
 
+def lookup(ref: TextureRef, data: TextureData, uv: np.ndarray, field: str) -> np.ndarray:
+    """(N, 4) texels of ``data`` (``ref`` decoded) at mesh uv: (N, 4) both uv sets (``MeshData.uv_sets``), or (N, 2)
+    the first alone; ``field`` names the parameter in the error for a missing second set."""
+    if uv.shape[-1] == 2 and ref.uv:
+        raise ValueError(f"{field} reads uv set {ref.uv}: pass both uv sets, (N, 4)")
+    uv = uv[:, 2 * ref.uv : 2 * ref.uv + 2]
+    m = ref.uv_matrix()
+    return data.sample(uv @ m[:2, :2].T + m[:2, 2])
+
+
 def texture_bytes(ref: TextureRef) -> tuple[bytes, str]:
     """The encoded image (PNG, JPEG…) ``ref`` names — a file, or an image inside a glTF file — and how to name it
     in a message; a SceneError when it cannot be read."""

@@ -103,7 +103,7 @@ class AreaLightTechnique(Forward):
     supports_masks: ClassVar[bool] = False
 
     def slots(self, material) -> dict[str, str]:
-        return {"BRDF": material.glsl, "AREA": self.area_glsl}
+        return {"BRDF": material.brdf_source, "AREA": self.area_glsl}
 
     def flags(self, material) -> dict[str, object]:
         return {**super().flags(material), **self.method_flags()}

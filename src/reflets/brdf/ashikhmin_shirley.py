@@ -9,13 +9,13 @@ from pydantic import Field
 
 from .base import (
     HalfVectorLobeMixture,
-    Material,
     Oriented,
     Reflectance,
     luminance,
     register_material,
     upper,
 )
+from .maps import Mapped
 
 #: an Ashikhmin–Shirley exponent
 Exponent = Annotated[float, Field(ge=0, le=1e6, allow_inf_nan=False)]
@@ -42,7 +42,7 @@ def grazing_falloff(cos: np.ndarray) -> np.ndarray:
 
 
 @register_material
-class AshikhminShirley(HalfVectorLobeMixture, Oriented, Material):
+class AshikhminShirley(HalfVectorLobeMixture, Oriented, Mapped):
     """Ashikhmin & Shirley 2000, "An anisotropic Phong BRDF model": Fresnel-weighted anisotropic Phong
     lobe (exponent n_u along the tangent, local x; n_v along y) plus a coupled, non-Lambertian diffuse term.
 

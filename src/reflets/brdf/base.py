@@ -56,6 +56,12 @@ class Material(BaseModel):
     glsl: ClassVar[str]
 
     @property
+    def brdf_source(self) -> str:
+        """What a shading pass includes as its BRDF slot: ``glsl``, or a twin made for these parameters (mapped
+        colours: ``brdf.maps``)."""
+        return self.glsl
+
+    @property
     def reciprocal(self) -> bool:
         """f(wo, wi) == f(wi, wo) with these parameters (the tests check it when True)."""
         return True

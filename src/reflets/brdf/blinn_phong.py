@@ -9,7 +9,6 @@ from pydantic import Field
 
 from .base import (
     HalfVectorLobeMixture,
-    Material,
     Reflectance,
     luminance,
     pdf_power_cosine,
@@ -17,6 +16,7 @@ from .base import (
     sample_power_cosine,
     upper,
 )
+from .maps import Mapped
 
 _Z = np.array([0.0, 0.0, 1.0])
 
@@ -27,7 +27,7 @@ def normalization(e: float) -> float:
 
 
 @register_material
-class BlinnPhong(HalfVectorLobeMixture, Material):
+class BlinnPhong(HalfVectorLobeMixture, Mapped):
     """Diffuse + Blinn–Phong specular lobe around the half vector h = normalize(wo + wi).
 
     Parameters
@@ -54,6 +54,7 @@ class BlinnPhong(HalfVectorLobeMixture, Material):
     normalized: bool = False
     lambertian_field: ClassVar[str] = "kd"
     specular_field: ClassVar[str] = "ks"
+    linear_specular: ClassVar[str] = "ks"
 
     def lobe_summary(self):
         return tuple(float(c) for c in self.kd), 2, float(self.exponent)

@@ -46,8 +46,28 @@ declared; GLSL vs NumPy on 10,000 random direction pairs with max relative error
 and, for every analytic model, the GPU forward renderer against the NumPy reference per pixel on an
 anisotropically oriented sphere (tests/test_gpu_vs_reference.py).
 
-| type | reciprocal | energy conserving |
-|---|---|---|
+## Texture maps
+
+A colour the BRDF is linear in — the Lambertian albedo and the colour scaling the rest — may be read from an image,
+multiplied by a factor (the field's value; default 1), as glTF's factors and textures are (`reflets.brdf.maps`):
+
+```toml
+[materials.wood]
+type = "phong"
+kd = { texture = "wood.png", factor = [0.9, 0.9, 0.9], transform = { scale = [4, 4] } }
+ks = [0.04, 0.04, 0.04]
+```
+
+The other keys are a texture's (`uv`, `srgb`, `transform`, `wrap`, `filter`, `channels`: docs/assets.md,
+*Textures*). Both renderers read the texels into the colour before evaluating the BRDF (GPU: `material_surface`,
+trilinear and anisotropic mips; reference: bilinear lookups at each hit, averaged over a supersampled pixel), and
+the prefiltered environment scales the albedos by the texels — exact for a linear colour. Lobe shapes (exponents,
+roughness) and colours the BRDF is not linear in (a Schlick F₀) are refused with the list of what can be mapped:
+glTF's material (`type = "gltf"`) maps roughness, metalness and the rest. The area-light methods that integrate
+constant colours (`ltc`, `analytic`, `biased`) leave a mapped material to `forward`.
+
+| type | reciprocal | energy conserving | texture maps |
+|---|---|---|---|
 """
 
 PROPERTIES = {
@@ -66,11 +86,29 @@ PROPERTIES = {
 }
 
 
+#: what may be a texture, where the model does not say it itself (``Mapped.mappable``)
+MAPS = {
+    "microfacet": "`diffuse`, `specular` (not a Schlick F₀)",
+    "gltf": "every factor (its `*_texture` slots)",
+    "scratched": "its base's",
+}
+
+
+def maps(name: str) -> str:
+    from .maps import Mapped
+
+    cls = MATERIALS[name]
+    if name in MAPS:
+        return MAPS[name]
+    mappable = cls.mappable() if issubclass(cls, Mapped) else ()
+    return ", ".join(f"`{field}`" for field in mappable) or "none"
+
+
 def markdown() -> str:
     lines = [HEADER.rstrip("\n")]
     for name in MATERIALS:
         reciprocal, energy = PROPERTIES[name]
-        lines.append(f"| `{name}` | {reciprocal} | {energy} |")
+        lines.append(f"| `{name}` | {reciprocal} | {energy} | {maps(name)} |")
     for name, cls in MATERIALS.items():
         doc = inspect.cleandoc(cls.__doc__ or "")
         module = inspect.getmodule(cls).__name__

@@ -75,7 +75,7 @@ from pydantic import Field, field_validator, model_validator
 
 from ..cache import Cache, source_hash
 from ..quantities import NonNeg
-from ..textures import TextureRef, load_texture
+from ..textures import TextureRef, load_texture, lookup
 from .base import RGB, Material, Unit, register_material
 from .microfacet import Distribution, _normalize, smith_lambda_ggx
 
@@ -555,15 +555,7 @@ class Gltf(Material):
         """(N, 4) texels of a slot at mesh uv: (N, 4) both uv sets (``MeshData.uv_sets``), or (N, 2) the first
         alone; None without a texture."""
         data = self.texture_data(field)
-        if data is None:
-            return None
-        ref = getattr(self, field)
-        if uv.shape[-1] == 2 and ref.uv:
-            raise ValueError(f"{field} reads uv set {ref.uv}: pass both uv sets, (N, 4)")
-        uv = uv[:, 2 * ref.uv : 2 * ref.uv + 2]
-        m = ref.uv_matrix()
-        image_uv = uv @ m[:2, :2].T + m[:2, 2]
-        return data.sample(image_uv)
+        return None if data is None else lookup(getattr(self, field), data, uv, field)
 
     def at(self, uv: np.ndarray, frames: tuple[np.ndarray, np.ndarray] | None = None) -> GltfPoints:
         """The material at mesh uv (N, 4 or 2: ``_lookup``): textures × factors (the reference's per-hit

@@ -10,7 +10,6 @@ from pydantic import BaseModel, ConfigDict, Field
 from ..quantities import Finite
 from .base import (
     RGB,
-    Material,
     Reflectance,
     finish_sample,
     luminance,
@@ -20,6 +19,7 @@ from .base import (
     sample_power_cosine,
     upper,
 )
+from .maps import Mapped
 
 #: the most lobes a material may have (the GLSL twin's uniform arrays have this size)
 MAX_LOBES = 8
@@ -43,7 +43,7 @@ class Lobe(BaseModel):
 
 
 @register_material
-class Lafortune(Material):
+class Lafortune(Mapped):
     """Diffuse term plus a sum of generalised cosine lobes in the local frame (Lafortune, Foo, Torrance &
     Greenberg 1997, "Non-linear approximation of reflectance functions").
 

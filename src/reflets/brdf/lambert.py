@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 
-from .base import Material, Reflectance, register_material, upper
+from .base import Reflectance, register_material, upper
+from .maps import Mapped
 
 
 @register_material
-class Lambert(Material):
+class Lambert(Mapped):
     """Ideal diffuse reflector.
 
     Parameters
@@ -21,6 +22,7 @@ class Lambert(Material):
 
     type: Literal["lambert"] = "lambert"
     albedo: Reflectance = (0.8, 0.8, 0.8)
+    lambertian_field: ClassVar[str] = "albedo"
 
     def lambertian_split(self):
         return tuple(float(c) for c in self.albedo), None

@@ -20,7 +20,6 @@ from ..fresnel import GOLD_ETA, GOLD_K, fresnel_conductor, fresnel_dielectric, f
 from ..quantities import Positive
 from .base import (
     RGB,
-    Material,
     Oriented,
     Reflectance,
     blinn_phong_exponent,
@@ -35,6 +34,7 @@ from .base import (
     sample_mixture,
     upper,
 )
+from .maps import Mapped
 
 _SQRT_PI = np.sqrt(np.pi)
 
@@ -189,7 +189,7 @@ Alpha = Annotated[float, Field(ge=1e-3, le=1, allow_inf_nan=False)]
 
 
 @register_material
-class Microfacet(Oriented, Material):
+class Microfacet(Oriented, Mapped):
     """Cook–Torrance microfacet reflection: an optional Lambertian term plus a rough specular lobe,
 
     f = diffuse/π + specular · F(wi·h) · D(h) · G(wo, wi) / (4 cosθo cosθi),  h = normalize(wo + wi),
@@ -240,6 +240,13 @@ class Microfacet(Oriented, Material):
     masking: Literal["separable", "correlated"] = "separable"
     diffuse: Reflectance = (0.0, 0.0, 0.0)
     lambertian_field: ClassVar[str] = "diffuse"
+    linear_specular: ClassVar[str] = "specular"
+
+    @classmethod
+    def mappable(cls, data: dict | None = None) -> tuple[str, ...]:
+        """Both colours, but not a Schlick F₀ (the BRDF is affine in it, not linear)."""
+        fresnel = (data or {}).get("fresnel", "none")
+        return ("diffuse",) if fresnel == "schlick" else ("diffuse", "specular")
 
     def lobe_summary(self):
         return tuple(float(c) for c in self.diffuse), 2, blinn_phong_exponent(self.alpha)

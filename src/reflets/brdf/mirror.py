@@ -15,11 +15,12 @@ from pydantic import model_validator
 
 from ..fresnel import GOLD_ETA, GOLD_K, fresnel_conductor
 from ..quantities import Positive
-from .base import LIGHT_TYPES, RGB, Material, Reflectance, register_material, upper
+from .base import LIGHT_TYPES, RGB, Reflectance, register_material, upper
+from .maps import Mapped
 
 
 @register_material
-class Mirror(Material):
+class Mirror(Mapped):
     """Perfectly smooth reflector (for ``reflector = true`` meshes).
 
     Parameters

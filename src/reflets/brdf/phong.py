@@ -8,7 +8,6 @@ import numpy as np
 from pydantic import Field
 
 from .base import (
-    Material,
     Reflectance,
     finish_sample,
     luminance,
@@ -20,6 +19,7 @@ from .base import (
     sample_power_cosine,
     upper,
 )
+from .maps import Mapped
 
 
 def mirror(wo: np.ndarray) -> np.ndarray:
@@ -39,7 +39,7 @@ def pdf_lobe(axis: np.ndarray, exponent: float, w: np.ndarray) -> np.ndarray:
 
 
 @register_material
-class Phong(Material):
+class Phong(Mapped):
     """Diffuse + Phong specular lobe around the mirror direction r = reflect(wo, n).
 
     Parameters
@@ -70,6 +70,7 @@ class Phong(Material):
     normalized: bool = False
     lambertian_field: ClassVar[str] = "kd"
     specular_field: ClassVar[str] = "ks"
+    linear_specular: ClassVar[str] = "ks"
 
     def lobe_summary(self):
         return tuple(float(c) for c in self.kd), 1, float(self.exponent)

@@ -9,7 +9,6 @@ from pydantic import Field
 
 from .base import (
     HalfVectorLobeMixture,
-    Material,
     Oriented,
     Reflectance,
     blinn_phong_exponent,
@@ -17,6 +16,7 @@ from .base import (
     register_material,
     upper,
 )
+from .maps import Mapped
 
 #: a Ward roughness (standard deviation of the surface slope)
 Roughness = Annotated[float, Field(ge=1e-3, le=1.0, allow_inf_nan=False)]
@@ -28,7 +28,7 @@ def slope_exponent(u: np.ndarray, ax: float, ay: float) -> np.ndarray:
 
 
 @register_material
-class Ward(HalfVectorLobeMixture, Oriented, Material):
+class Ward(HalfVectorLobeMixture, Oriented, Mapped):
     """Diffuse + anisotropic Ward specular lobe; roughness α_x along the tangent (local x), α_y along y.
 
     Parameters
@@ -63,6 +63,7 @@ class Ward(HalfVectorLobeMixture, Oriented, Material):
     variant: Literal["duer", "original"] = "duer"
     lambertian_field: ClassVar[str] = "kd"
     specular_field: ClassVar[str] = "ks"
+    linear_specular: ClassVar[str] = "ks"
 
     def lobe_summary(self):
         return tuple(float(c) for c in self.kd), 2, blinn_phong_exponent(self.alpha)

@@ -34,9 +34,25 @@ _MESA_LINE = re.compile(r"(?m)^(\d+):(\d+)\((\d+)\)")
 _NVIDIA_LINE = re.compile(r"(?m)^(\d+)\((\d+)\)")
 
 
-@cache
+#: sources made at run time (a material's GLSL twin with its texture maps, ``brdf.maps``), by the name they are
+#: included with; a name carries a digest of its text, so one name is always one text
+GENERATED: dict[str, str] = {}
+
+
+def register_source(name: str, text: str) -> str:
+    """Make ``text`` includable as ``name`` (a slot value); returns the name."""
+    GENERATED[name] = text
+    return name
+
+
 def read_source(name: str) -> str:
-    """Text of a package GLSL file named ``reflets/<path inside the package>``."""
+    """Text of a package GLSL file named ``reflets/<path inside the package>``, or of a generated one."""
+    generated = GENERATED.get(name)
+    return generated if generated is not None else _package_source(name)
+
+
+@cache
+def _package_source(name: str) -> str:
     parts = name.split("/")
     if parts[0] != "reflets" or len(parts) < 2 or ".." in parts:
         raise ShaderError(f"include name must look like \"reflets/<path>\", got '{name}'")

@@ -29,7 +29,7 @@ def fingerprint(scene, **params) -> tuple[str, dict]:
         if mesh.get("file"):
             mesh["file"] = {"name": Path(mesh["file"]).name, "sha256": file_digest(mesh["file"])}
     for material in description.get("materials", {}).values():
-        for value in material.values():  # textures by content, like mesh files
+        for value in [*material.values(), *(material.get("maps") or {}).values()]:  # textures by content, like meshes
             if isinstance(value, dict) and value.get("texture"):
                 value["texture"] = {"name": Path(value["texture"]).name, "sha256": file_digest(value["texture"])}
     description = {"scene": description, "version": REFERENCE_VERSION, **params}
@@ -61,11 +61,13 @@ def _digest(description: dict) -> str:
 
 def _volumetric_material(material: dict) -> dict:
     """A material as the volumetric reference sees it: fields left unset (None: added later, optional) dropped,
-    in nested materials too (a scratched material's base), and a translucent material's real-time model (its
-    diffusion ``profile``, ``single_scattering``) — the path tracer simulates the medium itself."""
+    in nested materials too (a scratched material's base), empty texture maps (added later: ``maps = {}``), and a
+    translucent material's real-time model (its diffusion ``profile``, ``single_scattering``) — the path tracer
+    simulates the medium itself."""
     real_time = ("profile", "single_scattering") if material.get("type") == "translucent" else ()
     return {k: _volumetric_material(v) if isinstance(v, dict) and "type" in v else v
-            for k, v in material.items() if v is not None and k not in real_time}  # fmt: skip
+            for k, v in material.items()
+            if v is not None and k not in real_time and not (k == "maps" and not v)}  # fmt: skip
 
 
 #: camera fields at their defaults (added after references were stored: the same image)

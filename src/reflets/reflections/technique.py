@@ -305,7 +305,7 @@ class Fermat(Forward):
             program = get_program(
                 ctx,
                 COMPOSITE_PROGRAM,
-                slots={"BRDF": material.glsl},
+                slots={"BRDF": material.brdf_source},
                 BACKGROUND_ENV=int(scene.background_color() is None),
                 **material.flags(),
             )
@@ -377,7 +377,7 @@ class Fermat(Forward):
             program = get_program(
                 ctx,
                 REFLECTED_PROGRAM,
-                slots={"BRDF": material.glsl},
+                slots={"BRDF": material.brdf_source},
                 REFLECTED_EMITTER=0,
                 EMITTER_MASK=0,
                 SCRATCHED=int(scratched),

@@ -209,14 +209,12 @@ def _check_files(scene: Scene, source) -> None:
 def _check_uv_sets(scene: Scene) -> None:
     """A texture on the second uv set of a mesh that has one (a procedural shape, an OBJ or PLY file, a glTF
     primitive without TEXCOORD_1) reads the first: one warning line per mesh."""
-    from ..textures import TextureRef
     from .geometry import mesh_data
 
     for i, mesh in enumerate(scene.mesh):
         material = scene.materials.get(mesh.material) if mesh.material else None
         source = getattr(material, "base", material)  # a scratched material's textures are its base's
-        second = [key for key, ref in vars(source).items() if isinstance(ref, TextureRef) and ref.uv == 1] \
-            if source is not None else []  # fmt: skip
+        second = [key for key, ref in texture_refs(source).items() if ref.uv == 1] if source is not None else []
         if not second:
             continue
         try:
@@ -232,15 +230,11 @@ def _check_textures(scene: Scene, name: str, material, source) -> None:
     """Texture paths made absolute (materials resolve them without the scene) and present; images of a glTF file
     must exist in it. A material's own base material (a scratched one's) likewise."""
     from ..brdf.base import Material
-    from ..textures import TextureRef
 
     base = getattr(material, "base", None)
     if isinstance(base, Material):
         _check_textures(scene, f"{name}.base", base, source)
-    for key in type(material).model_fields:
-        ref = getattr(material, key)
-        if not isinstance(ref, TextureRef):
-            continue
+    for key, ref in texture_refs(material).items():
         path = scene.resolve(ref.texture)
         if not path.is_file():
             what = "is a directory" if path.is_dir() else "not found"
@@ -255,12 +249,26 @@ def _check_textures(scene: Scene, name: str, material, source) -> None:
             if ref.image >= count:
                 raise SceneError(f"image {ref.image} does not exist: {path.name} has {count} images", file=source,
                                  field=f"materials.{name}.{key}.image")  # fmt: skip
+        field = key.removeprefix("maps.")
         if path != ref.texture:
-            setattr(material, key, ref.model_copy(update={"texture": path}))
+            ref = ref.model_copy(update={"texture": path})
+            if field == key:
+                setattr(material, key, ref)
+            else:
+                material.maps[field] = ref
         try:  # decoded now (and cached for the renderers), so that a damaged image fails here, not mid-render
-            material.texture_data(key)
+            material.texture_data(field)
         except SceneError as exc:
             raise SceneError(exc.message, file=exc.file, field=f"materials.{name}.{key}") from None
+
+
+def texture_refs(material) -> dict:
+    """A material's textures by field: its ``*_texture`` fields (glTF's) and its mapped colours (``maps.albedo``)."""
+    from ..textures import TextureRef
+
+    refs = {key: getattr(material, key) for key in type(material).model_fields}
+    refs = {key: ref for key, ref in refs.items() if isinstance(ref, TextureRef)}
+    return {**refs, **{f"maps.{key}": ref for key, ref in (getattr(material, "maps", None) or {}).items()}}
 
 
 def did_you_mean(word: str, choices) -> str:

@@ -275,6 +275,16 @@ class Scratched(Oriented, Material):
     def pdf(self, wo, wi):
         return self.base.pdf(wo, wi)
 
+    @property
+    def brdf_source(self) -> str:
+        """``glsl``, including the base's own twin for its parameters (a base with mapped colours: ``brdf.maps``)."""
+        if self.base.brdf_source == self.base.glsl:
+            return self.glsl
+        from ..gpu.programs import read_source, register_source
+
+        text = read_source(self.glsl).replace(f'#include "{self.base.glsl}"', f'#include "{self.base.brdf_source}"')
+        return register_source(f"{self.glsl}#{self.base.brdf_source.split('#')[-1]}", text)
+
     # a textured base (a glTF material): its parameters at each point, as the GLSL twin's material_surface reads them
     @property
     def textured(self) -> bool:

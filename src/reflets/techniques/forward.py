@@ -363,7 +363,7 @@ class Forward(Technique):
 
     def slots(self, material) -> dict[str, str]:
         """GLSL include slots of the BRDF shading's program for one material."""
-        return {"BRDF": material.glsl}
+        return {"BRDF": material.brdf_source}
 
     def pass_flags(self) -> dict[str, object]:
         """Flags every mesh program of this pass takes: the output and the light counts."""

@@ -23,7 +23,7 @@ class MaterialShading:
     program: ClassVar[ProgramSpec]
 
     def slots(self, material) -> dict[str, str]:
-        return {"BRDF": material.glsl}
+        return {"BRDF": material.brdf_source}
 
     def flags(self, material) -> dict[str, object]:
         """Compile-time flags besides the pass's own (output, light counts)."""

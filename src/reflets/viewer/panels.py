@@ -200,7 +200,10 @@ class Panels:
                 imgui.separator()
                 imgui.text(f"material '{name}'")
                 material = c.scene.materials[name]
-                for field, value in material.model_dump(exclude_none=True).items():
+                fields = material.model_dump(exclude_none=True)
+                for field, value in fields.pop("maps", {}).items():  # mapped colours (their factors edited below)
+                    self._texture(field, value, material.texture_data(field))
+                for field, value in fields.items():
                     if isinstance(value, dict) and "texture" in value:  # a texture slot (glTF)
                         self._texture(field, value, material.texture_data(field))
                         continue

@@ -41,6 +41,9 @@ vec3 image_based_lighting(vec3 x, mat3 frame, vec3 wo) {
     float node = clamp(dot(n, v), 0.0, 1.0) * float(IBL_NODES) - 0.5;
     int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);
     vec3 albedo = mix(u_ibl_albedo[k0], u_ibl_albedo[k1], clamp(node - float(k0), 0.0, 1.0));
+#ifdef MATERIAL_IBL_SCALE
+    material_ibl_scale(diffuse_albedo, albedo);  // mapped colours (reflets/brdf/maps.py): the factors' albedos × texels
+#endif
 #endif
     vec3 diffuse = diffuse_albedo * INV_PI * texture(u_ibl_irradiance, equirect_uv(u_ibl_env_from_world * n)).rgb;
     // the lobe's dominant direction, between r and n as roughness grows (Lagarde & de Rousiers 2014): the

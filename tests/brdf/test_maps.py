@@ -1,0 +1,157 @@
+"""Texture maps on the BRDF library's colours (reflets/brdf/maps.py): per-point evaluation in NumPy, the GLSL twin
+reading the texels before brdf_eval, both renderers against each other, what cannot be mapped refused."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import reflets
+from reflets.bench.assets import block_means as blocks
+from reflets.brdf import MATERIALS
+from reflets.brdf.maps import Mapped
+from reflets.errors import SceneError
+from reflets.metrics import relmse
+
+UV_GRID = str(Path(__file__).parents[1] / "data" / "gltf" / "TextureTransformTest" / "UV.png")  # colourful grid
+MAPPED = {
+    "lambert": {},
+    "phong": {"ks": (0.3, 0.2, 0.1), "exponent": 40},
+    "blinn_phong": {"ks": (0.3, 0.2, 0.1), "exponent": 40, "normalized": True},
+    "microfacet": {"alpha": 0.3, "fresnel": "conductor", "diffuse": (0.2, 0.2, 0.2)},
+    "ward": {"alpha": 0.2},
+    "lafortune": {},
+}
+
+
+def mapped_fields():
+    return [(name, field) for name in MAPPED for field in MATERIALS[name].mappable(MAPPED[name])]
+
+
+def test_every_model_with_a_lambertian_or_linear_colour_takes_maps():
+    mappable = {name for name, cls in MATERIALS.items() if issubclass(cls, Mapped) and cls.mappable(MAPPED.get(name))}
+    assert mappable == set(MAPPED)
+    assert MATERIALS["microfacet"].mappable({"fresnel": "schlick"}) == ("diffuse",)  # F0: affine, not linear
+
+
+@pytest.mark.parametrize(("name", "field"), mapped_fields())
+def test_at_evaluates_each_point_with_its_own_colour(name, field, rng):
+    """``at(uv)`` (arrays of colours through the model's own eval) equals the model with each point's colour as a
+    constant: every model's eval broadcasts its colours."""
+    factor = (0.7, 0.5, 0.9)
+    material = MATERIALS[name](**{**MAPPED[name], field: {"texture": UV_GRID, "factor": factor}})
+    n = 64
+    uv = rng.random((n, 2))
+    wo = rng.normal(size=(n, 3))
+    wi = rng.normal(size=(n, 3))
+    wo[:, 2], wi[:, 2] = np.abs(wo[:, 2]), np.abs(wi[:, 2])
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    colours = np.asarray(factor) * material.texels(field, uv)
+    assert np.ptp(colours, axis=0).min() > 0.1  # the texture varies in every channel
+    expected = np.array([
+        MATERIALS[name](**{**MAPPED[name], field: tuple(c)}).eval(wo[i : i + 1], wi[i : i + 1])[0]
+        for i, c in enumerate(colours)
+    ])  # fmt: skip
+    np.testing.assert_allclose(material.at(uv).eval(wo, wi), expected, rtol=1e-12, atol=1e-15)
+    # sampled as the factors are: the same densities
+    u1, u2 = rng.random(n), rng.random(n)
+    points = material.at(uv)
+    np.testing.assert_array_equal(points.pdf(wo, wi), material.pdf(wo, wi))
+    np.testing.assert_array_equal(points.sample(wo, u1, u2)[0], material.sample(wo, u1, u2)[0])
+
+
+def test_a_mapped_material_round_trips_through_its_dump():
+    material = MATERIALS["phong"](kd={"texture": UV_GRID, "factor": [0.5, 0.5, 0.5], "transform": {"scale": [2, 2]}})
+    assert material.kd == (0.5, 0.5, 0.5) and material.maps["kd"].transform.scale == (2.0, 2.0)
+    assert material.textured and not material.tabulated
+    assert MATERIALS["phong"].model_validate(material.model_dump()) == material
+    assert MATERIALS["lambert"](albedo={"texture": UV_GRID}).albedo == (1.0, 1.0, 1.0)  # factor 1: the texture
+
+
+@pytest.mark.parametrize(
+    ("material", "says"),
+    [
+        ({"type": "phong", "exponent": {"texture": UV_GRID}}, "materials.m: exponent cannot be a texture"),
+        ({"type": "microfacet", "fresnel": "schlick", "specular": {"texture": UV_GRID}}, "accepted for: diffuse"),
+        ({"type": "ashikhmin_shirley", "rd": {"texture": UV_GRID}}, "rd cannot be a texture"),
+        ({"type": "lambert", "albedo": {"texture": "missing.png"}}, "materials.m.maps.albedo: texture not found"),
+        ({"type": "lambert", "albedo": {"texture": UV_GRID, "factor": [2, 0, 0]}}, "materials.m.albedo"),
+        ({"type": "lambert", "albedo": {"texture": UV_GRID, "uv": 3}}, "uv"),
+    ],
+)
+def test_what_cannot_be_mapped_is_refused_in_one_line(material, says, tmp_path):
+    with pytest.raises(SceneError) as caught:
+        reflets.load_dict({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]}, "materials": {"m": material},
+                           "mesh": [{"shape": "sphere", "material": "m"}]}, base_dir=tmp_path)  # fmt: skip
+    assert says in str(caught.value) and "\n" not in str(caught.value)
+
+
+def mapped_scene(lights: list, size=(96, 72)) -> reflets.Scene:
+    """A textured Lambert floor (its map tiled 3 × 3), a Phong ball with a diffuse map and a gold-like conductor
+    with a specular map."""
+    return reflets.load_dict({
+        "camera": {"position": [0, 1.2, 3.2], "look_at": [0, 0.3, 0], "fov_y": 40, "size": list(size)},
+        "materials": {
+            "floor": {"type": "lambert",
+                      "albedo": {"texture": UV_GRID, "factor": [0.9, 0.9, 0.9], "transform": {"scale": [3, 3]}}},
+            "ball": {"type": "phong", "kd": {"texture": UV_GRID, "factor": [0.6, 0.6, 0.6]}, "ks": [0.3, 0.3, 0.3],
+                     "exponent": 40, "normalized": True},
+            "metal": {"type": "microfacet", "alpha": 0.3, "fresnel": "conductor", "specular": {"texture": UV_GRID}},
+        },
+        "mesh": [{"shape": "plane", "size": [4, 4], "material": "floor"},
+                 {"shape": "sphere", "radius": 0.5, "material": "ball", "transform": {"translate": [-0.6, 0.5, 0]}},
+                 {"shape": "sphere", "radius": 0.5, "material": "metal", "transform": {"translate": [0.6, 0.5, 0]}}],
+        "light": lights,
+    })  # fmt: skip
+
+
+def unmapped(scene: reflets.Scene) -> reflets.Scene:
+    return scene.model_copy(update={"materials": {n: m.model_copy(update={"maps": {}}) for n, m in
+                                                  scene.materials.items()}})  # fmt: skip
+
+
+POINT = {"type": "point", "position": [1, 2, 2], "intensity": [30, 30, 30]}
+QUAD = {"type": "quad", "corners": [[-0.5, 2.2, 0.5], [0.5, 2.2, 0.5], [-0.5, 2.2, 1.5]], "radiance": [12, 12, 12]}
+
+
+def test_mapped_colours_under_a_point_and_a_quad_light_as_the_reference():
+    """Forward (the quad light's midpoint samples) with the texels read before brdf_eval, against the reference's
+    per-hit colours; shadows on."""
+    scene = mapped_scene([POINT, QUAD])
+    image = reflets.render(scene, spp=16)
+    ref = reflets.reference(scene, spp=32, pixel="box", progress=False).image
+    assert relmse(blocks(image), blocks(ref)) < 1.5e-3  # measured 2.9e-4 (the reference's 32 spp of noise)
+    assert relmse(blocks(reflets.render(unmapped(scene), spp=16)), blocks(ref)) > 1.0  # the maps matter: 24
+
+
+def test_mapped_colours_under_the_environment_add_no_error_to_the_split_sums(ctx):
+    """The prefiltered environment scales the factors' albedos by the texels (exact for linear colours): the
+    mapped scene is as far from its reference as the unmapped one from its own."""
+    from reflets.scene.assets import default_environment
+
+    scene = mapped_scene([{"type": "environment", "file": str(default_environment())}])
+    mapped = relmse(blocks(reflets.render(scene, spp=16)),
+                    blocks(reflets.reference(scene, spp=32, pixel="box", progress=False).image))  # fmt: skip
+    plain = unmapped(scene)
+    baseline = relmse(blocks(reflets.render(plain, spp=16)),
+                      blocks(reflets.reference(plain, spp=32, pixel="box", progress=False).image))  # fmt: skip
+    assert mapped < min(1.2 * baseline, 0.03)  # measured 7.5e-3 mapped, 1.3e-2 unmapped
+
+
+def test_mapped_colours_are_exported_in_their_gltf_slots(tmp_path):
+    """export-gltf: the colour that becomes the base colour carries its texture there (the Lambert floor: factor ×
+    texture, as glTF reads it), the Phong ball's diffuse map too; read back, the same texels."""
+    from reflets.gltf import export_gltf
+
+    scene = mapped_scene([POINT])
+    path, notes = export_gltf(scene, tmp_path / "mapped.glb")
+    back = reflets.load_scene(path)
+    floors = [m for m in back.materials.values() if m.base_color_texture is not None]
+    assert len(floors) == 3  # the floor's and the ball's diffuse maps, the conductor's tint
+    original = scene.materials["floor"].texture_data("albedo")
+    assert any(np.array_equal(m.texture_data("base_color_texture").codes, original.codes) for m in floors)
+    floor = next(m for m in floors if m.base_color_texture.transform is not None)
+    assert floor.base_color[:3] == pytest.approx((0.9, 0.9, 0.9)) and floor.base_color_texture.transform.scale == (3, 3)
