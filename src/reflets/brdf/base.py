@@ -169,6 +169,12 @@ class Material(BaseModel):
         the opaque surfaces and the background, farthest first."""
         return False
 
+    @property
+    def ibl_interface(self) -> Material | None:
+        """The part of the material a colour map does not tint (a translucent material's interface), as a material
+        whose albedo curve the prefiltered environment keeps apart (``material_ibl_scale``); None: all is tinted."""
+        return None
+
     #: the GLSL twin gives the split sum's albedos per fragment (``material_ibl``): no albedo curve is computed
     fragment_ibl: ClassVar[bool] = False
 

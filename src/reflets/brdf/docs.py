@@ -91,6 +91,7 @@ MAPS = {
     "microfacet": "`diffuse`, `specular` (not a Schlick F₀)",
     "gltf": "every factor (its `*_texture` slots)",
     "scratched": "its base's",
+    "translucent": "`albedo_texture`: the light leaving the medium × its texel",
 }
 
 

@@ -32,16 +32,6 @@ from pydantic import Field, model_validator
 from ..textures import TextureRef, load_texture, lookup
 from .base import Material
 
-#: GLSL of the hooks a shading pass calls on a material with MATERIAL_SURFACE: a mapped colour has no normal map,
-#: coverage, emission or occlusion
-_HOOKS = """
-void material_antialias(vec3 n) {}
-bool material_covered() { return true; }
-vec3 material_emission() { return vec3(0.0); }
-float material_alpha() { return 1.0; }
-float material_occlusion() { return 1.0; }
-"""
-
 
 class Mapped(Material):
     """A material of the BRDF library whose colours may be texture maps (module docstring)."""
@@ -157,10 +147,10 @@ class Mapped(Material):
             *surface,
             "}",
             "// the prefiltered environment's albedos (of the factors) scaled by the texels: exact for linear colours",
-            "void material_ibl_scale(inout vec3 diffuse_albedo, inout vec3 albedo) {",
+            "void material_ibl_scale(float mu, vec3 untinted, inout vec3 diffuse_albedo, inout vec3 albedo) {",
             *scale,
             "}",
-            _HOOKS,
+            '#include "reflets/brdf/glsl/surface_hooks.glsl"',
         ])  # fmt: skip
         digest = hashlib.sha256(text.encode()).hexdigest()[:16]
         return register_source(f"{self.glsl}#maps-{digest}", text)

@@ -201,6 +201,8 @@ class PrefilteredEnvironment:
             "u_ibl_albedo": cached_specular_albedo(material).astype(np.float32).tobytes(),
             "u_ibl_diffuse": tuple(float(c) for c in material.lambertian_split()[0]),
             "u_ibl_alpha": equivalent_alpha(material),
+            "u_ibl_untinted": (np.zeros((ALBEDO_NODES, 3)) if material.ibl_interface is None
+                                else cached_specular_albedo(material.ibl_interface)).astype(np.float32).tobytes(),
             **maps,
         }
 

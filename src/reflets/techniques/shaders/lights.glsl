@@ -27,6 +27,7 @@ uniform mat3 u_ibl_env_from_world;
 uniform vec3 u_ibl_albedo[IBL_NODES];  // the material's specular directional albedo at μ = (k + ½) / IBL_NODES
 uniform vec3 u_ibl_diffuse;            // its Lambertian albedo
 uniform float u_ibl_alpha;             // its main lobe's GGX-equivalent roughness
+uniform vec3 u_ibl_untinted[IBL_NODES];  // the part of u_ibl_albedo a material's colour maps leave as it is
 
 vec3 image_based_lighting(vec3 x, mat3 frame, vec3 wo) {
     vec3 n = frame[2], v = frame * wo;
@@ -42,7 +43,10 @@ vec3 image_based_lighting(vec3 x, mat3 frame, vec3 wo) {
     int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);
     vec3 albedo = mix(u_ibl_albedo[k0], u_ibl_albedo[k1], clamp(node - float(k0), 0.0, 1.0));
 #ifdef MATERIAL_IBL_SCALE
-    material_ibl_scale(diffuse_albedo, albedo);  // mapped colours (reflets/brdf/maps.py): the factors' albedos × texels
+    // mapped colours (reflets/brdf/maps.py), a translucent albedo map: the albedos × texels, except the share of an
+    // interface the map does not tint (a translucent material's reflection: u_ibl_untinted)
+    vec3 untinted = mix(u_ibl_untinted[k0], u_ibl_untinted[k1], clamp(node - float(k0), 0.0, 1.0));
+    material_ibl_scale(dot(n, v), untinted, diffuse_albedo, albedo);
 #endif
 #endif
     vec3 diffuse = diffuse_albedo * INV_PI * texture(u_ibl_irradiance, equirect_uv(u_ibl_env_from_world * n)).rgb;

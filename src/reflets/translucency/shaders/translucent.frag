@@ -14,6 +14,7 @@ in vec3 v_position;
 in vec3 v_normal;
 in vec4 v_tangent;
 in vec2 v_uv;
+in vec2 v_uv1;
 
 uniform vec3 u_eye;
 uniform mat4 u_light_view_proj;
@@ -407,6 +408,10 @@ void main() {
     vec3 x = v_position;
     vec3 wo = normalize(u_eye - x);
     vec3 color = vec3(0.0);
+#ifdef MATERIAL_SURFACE
+    mat3 surface_frame = shading_frame(n, v_tangent);
+    material_surface(vec4(v_uv, v_uv1), surface_frame);  // the albedo map's texel here, where the light leaves
+#endif
 #if (TERMS & 1) != 0
     vec3 wl = to_light(x);
     vec3 xi, ni;
@@ -424,15 +429,17 @@ void main() {
     bool exits = dot(n, wo) > 0.0 && refracted_exit(x, n, wo, t_in, xe, ne);
     if (exits) s_exit = length(xe - x) * a_mm_per_unit;
 #endif
+    vec3 leaving = vec3(0.0);  // the light leaving the medium at x: × the albedo map
 #if (TERMS & 2) != 0
-    color += single_scattering(x, n, wo, s_exit);
+    leaving += single_scattering(x, n, wo, s_exit);
 #endif
 #if (TERMS & 4) != 0
-    color += multiple_scattering(x, n, wo);
+    leaving += multiple_scattering(x, n, wo);
 #endif
 #if REFRACTION && (TERMS & 8) != 0
-    if (exits) color += transmitted(x, n, wo, t_in, xe, ne);
+    if (exits) leaving += transmitted(x, n, wo, t_in, xe, ne);
 #endif
+    color += leaving * tr_albedo();
 #if REFRACTION == 2
     color = exits ? xe : vec3(0.0);  // the exit point as output (tests)
 #endif

@@ -7,6 +7,36 @@ uniform float m_eta;
 uniform float m_roughness;  // Beckmann m; 0 = smooth interface (no glossy lobe)
 uniform vec3 m_diffuse;
 
+// An albedo map (BRDF_TR_ALBEDO_MAP: 1 + its uv set): the light leaving the medium × its texel at the exit point —
+// the diffusion term here, single and multiple scattering in translucent.frag (tr_albedo()).
+#if defined(BRDF_TR_ALBEDO_MAP)
+#define MATERIAL_SURFACE 1
+#define MATERIAL_IBL_SCALE 1
+uniform sampler2D m_albedo_map;
+uniform mat3 m_albedo_map_uv;  // mesh uv (v up) → image uv
+vec3 g_albedo = vec3(1.0);
+
+void material_surface(vec4 uvs, inout mat3 frame) {
+    vec2 uv = BRDF_TR_ALBEDO_MAP == 2 ? uvs.zw : uvs.xy;
+    g_albedo = texture(m_albedo_map, (m_albedo_map_uv * vec3(uv, 1.0)).xy).rgb;
+}
+
+// the split sum's albedo: the interface's share as it is, the rest (the diffusion term's) tinted
+void material_ibl_scale(float mu, vec3 untinted, inout vec3 diffuse_albedo, inout vec3 albedo) {
+    diffuse_albedo *= g_albedo;
+    albedo = untinted + max(albedo - untinted, vec3(0.0)) * g_albedo;
+}
+#include "reflets/brdf/glsl/surface_hooks.glsl"
+#endif
+
+vec3 tr_albedo() {
+#if defined(BRDF_TR_ALBEDO_MAP)
+    return g_albedo;
+#else
+    return vec3(1.0);
+#endif
+}
+
 float tr_beckmann_d(float cos_h, float m) {
     float c2 = max(cos_h * cos_h, 1e-24);
     return exp(-(1.0 - c2) / (c2 * m * m)) / (PI * m * m * c2 * c2);
@@ -29,5 +59,5 @@ float tr_specular(vec3 wo, vec3 wi) {
 vec3 brdf_eval(vec3 wo, vec3 wi) {
     if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
     float ft = (1.0 - fresnel_dielectric(wi.z, m_eta)) * (1.0 - fresnel_dielectric(wo.z, m_eta));
-    return m_diffuse * ft + vec3(tr_specular(wo, wi));
+    return m_diffuse * tr_albedo() * ft + vec3(tr_specular(wo, wi));
 }
