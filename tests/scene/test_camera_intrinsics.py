@@ -81,6 +81,7 @@ def test_orthographic_camera_needs_its_window(tmp_path):
 
 @pytest.mark.slow
 def test_mitsuba_sensor_off_centre():
+    pytest.importorskip("mitsuba")  # the [reference] extra (a GPU machine without it skips)
     scene = _scene({"principal_offset": OFF_CENTRE["principal_offset"]})
     gpu = reflets.render(scene, method="forward")
     mitsuba = reference(scene, spp=64, engine="mitsuba", progress=False).image
