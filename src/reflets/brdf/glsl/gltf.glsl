@@ -94,6 +94,18 @@ uniform mat3 m_thickness_map_uv;
 #endif
 uniform sampler2D m_ibl_lut;
 
+// The table read bilinearly in float (clamped to its edges, texel centres at (i + 0.5) / size: the sampler's own
+// rule): a GPU's filtering weights may have 8 bits (NVIDIA's), which put E_sheen 40 % off where 1 - E nears 0.
+vec4 ibl_table(vec2 uv) {
+    ivec2 size = textureSize(m_ibl_lut, 0);
+    vec2 p = clamp(uv * vec2(size) - 0.5, vec2(0.0), vec2(size - 1));
+    ivec2 i = ivec2(floor(p));
+    ivec2 j = min(i + 1, size - 1);
+    vec2 f = p - vec2(i);
+    return mix(mix(texelFetch(m_ibl_lut, i, 0), texelFetch(m_ibl_lut, ivec2(j.x, i.y), 0), f.x),
+               mix(texelFetch(m_ibl_lut, ivec2(i.x, j.y), 0), texelFetch(m_ibl_lut, j, 0), f.x), f.y);
+}
+
 // the parameters at this fragment (material_surface sets them)
 vec3 g_base = vec3(1.0);
 float g_metallic = 1.0;
@@ -223,7 +235,7 @@ void material_surface(vec4 uvs, inout mat3 frame) {
 // the sheen lobe's albedo E at mu = n.v (the table's fourth channel, at the sheen roughness: gltf.py's
 // sheen_albedo interpolates the same texels)
 float gltf_sheen_albedo(float mu) {
-    return textureLod(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), g_sheen_roughness), 0.0).a;
+    return ibl_table(vec2(clamp(mu, 0.0, 1.0), g_sheen_roughness)).a;
 }
 
 // KHR_materials_sheen's fitted exponent of the Charlie lambda, and lambda itself
@@ -334,7 +346,7 @@ void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, o
     return;
 #endif
     float lobe_alpha = gltf_lobe_alpha();
-    vec3 abp = texture(m_ibl_lut, vec2(clamp(mu, 0.0, 1.0), sqrt(lobe_alpha))).rgb;
+    vec3 abp = ibl_table(vec2(clamp(mu, 0.0, 1.0), sqrt(lobe_alpha))).rgb;
     specular_albedo = mix(g_specular * (g_f0 * abp.x + abp.y), g_base * abp.x + abp.y, g_metallic);
     float f0_max = max(g_f0.r, max(g_f0.g, g_f0.b));  // max(F) = max(F0) + (1 - max(F0)) s: F grows with F0
     diffuse_albedo = (1.0 - g_metallic) * (1.0 - g_transmission) * g_base
@@ -356,7 +368,7 @@ void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 specular_albedo, o
 vec3 material_transmission(mat3 frame, vec3 v, out float alpha) {
     float mu = clamp(dot(frame[2], v), 0.0, 1.0);
     alpha = gltf_lobe_alpha();
-    vec3 abp = texture(m_ibl_lut, vec2(mu, sqrt(alpha))).rgb;
+    vec3 abp = ibl_table(vec2(mu, sqrt(alpha))).rgb;
     float f0 = max(g_f0.r, max(g_f0.g, g_f0.b));
     vec3 weight = (1.0 - g_metallic) * g_transmission * g_base * max(abp.x + abp.y - g_specular * (f0 * abp.x + abp.y), 0.0);
 #if BRDF_GLTF_SHEEN
@@ -378,7 +390,7 @@ void material_coat_ibl(mat3 frame, vec3 v, out float weight, out vec3 normal, ou
     float mu = clamp(dot(normal, v), 0.0, 1.0);
     weight = g_coat * (0.04 + 0.96 * pow(1.0 - mu, 5.0));
     alpha = g_coat_alpha;
-    vec3 abp = texture(m_ibl_lut, vec2(mu, sqrt(alpha))).rgb;
+    vec3 abp = ibl_table(vec2(mu, sqrt(alpha))).rgb;
     albedo = abp.x + abp.y;
 }
 
