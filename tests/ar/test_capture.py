@@ -154,7 +154,8 @@ def test_the_gpu_samples_the_uploaded_array_as_the_numpy_lookup(ctx, rng):
     finally:
         ctx.disable_direct(seamless)
         release_objects(ctx, [vao, target, program, query, cube])  # the default framebuffer bound first
-    np.testing.assert_allclose(gpu, lookup(faces, dirs, levels), atol=2e-3)  # llvmpipe: 5e-7
+    # llvmpipe: 5e-7; a GPU filters with fixed-point weights (NVIDIA H100: up to 5.0e-3 off the float lookup)
+    np.testing.assert_allclose(gpu, lookup(faces, dirs, levels), atol=1e-2)
 
 
 # ----------------------------------------------------------------------------------------------------- capture
