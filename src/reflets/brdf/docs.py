@@ -64,7 +64,8 @@ trilinear and anisotropic mips; reference: bilinear lookups at each hit, average
 the prefiltered environment scales the albedos by the texels — exact for a linear colour. Lobe shapes (exponents,
 roughness) and colours the BRDF is not linear in (a Schlick F₀) are refused with the list of what can be mapped:
 glTF's material (`type = "gltf"`) maps roughness, metalness and the rest. The area-light methods that integrate
-constant colours (`ltc`, `analytic`, `biased`) leave a mapped material to `forward`.
+constant colours (`ltc`, `analytic`, `biased`) leave a mapped material to `forward` in `auto` (asked for by name,
+they integrate the factors and say so).
 
 | type | reciprocal | energy conserving | texture maps |
 |---|---|---|---|

@@ -17,8 +17,9 @@ the material's albedos by the texels (``material_ibl_scale``: exact for a linear
 linear in (a Schlick F₀, Ashikhmin–Shirley's ``rs``) and lobe shapes (exponents, roughness) are refused with the
 list of what can be mapped: glTF's material (``type = "gltf"``) maps roughness and metalness.
 
-Area-light methods that integrate constant colours (``ltc``, ``analytic``, ``biased``) leave a mapped material to
-``forward`` (``tabulated`` is False), which evaluates ``brdf_eval`` per fragment.
+In the default method ``auto``, area lights reach a mapped material through ``forward`` (``tabulated`` is False:
+``brdf_eval`` per fragment); ``ltc``, ``analytic`` and ``biased`` asked for by name integrate the factors and warn
+that they ignore the textures. A scratched material's base takes no maps (``scratches.material``).
 """
 
 from __future__ import annotations

@@ -203,6 +203,9 @@ class Scratched(Oriented, Material):
             raise ValueError('fresnel = "none" takes neither conductor nor ior')
         if self.base.cutout:  # the scratches pass neither cuts nor blends
             raise ValueError(f'a glTF base must be opaque (alpha_mode "{self.base.alpha_mode}" is not taken here)')
+        if getattr(self.base, "maps", None):  # the environment's split sum takes the base's constant albedos
+            raise ValueError(f"the base's colours cannot be texture maps ({', '.join(self.base.maps)}): a glTF base "
+                             "(type = \"gltf\") takes textures here")  # fmt: skip
         if getattr(self.base, "transmissive", False):  # nor draws what lies behind
             raise ValueError("a glTF base must be opaque (a transmission factor is not taken here)")
         return self
@@ -274,16 +277,6 @@ class Scratched(Oriented, Material):
 
     def pdf(self, wo, wi):
         return self.base.pdf(wo, wi)
-
-    @property
-    def brdf_source(self) -> str:
-        """``glsl``, including the base's own twin for its parameters (a base with mapped colours: ``brdf.maps``)."""
-        if self.base.brdf_source == self.base.glsl:
-            return self.glsl
-        from ..gpu.programs import read_source, register_source
-
-        text = read_source(self.glsl).replace(f'#include "{self.base.glsl}"', f'#include "{self.base.brdf_source}"')
-        return register_source(f"{self.glsl}#{self.base.brdf_source.split('#')[-1]}", text)
 
     # a textured base (a glTF material): its parameters at each point, as the GLSL twin's material_surface reads them
     @property

@@ -120,7 +120,7 @@ def cached_specular_albedo(material) -> np.ndarray:
     counts and the source of its model, of the BRDF base and of this module (a measured table: its file stamp)."""
     module = sys.modules[type(material).__module__].__file__
     data = {
-        "material": material.model_dump(mode="json"),
+        "material": material.model_dump(mode="json", exclude={"maps"}),  # the factors: what the integrals read
         "nodes": ALBEDO_NODES,
         "samples": ALBEDO_SAMPLES,
         "code": _source_hash(module),
