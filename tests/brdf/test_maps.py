@@ -80,6 +80,8 @@ def test_a_mapped_material_round_trips_through_its_dump():
         ({"type": "lambert", "albedo": {"texture": "missing.png"}}, "materials.m.maps.albedo: texture not found"),
         ({"type": "lambert", "albedo": {"texture": UV_GRID, "factor": [2, 0, 0]}}, "materials.m.albedo"),
         ({"type": "lambert", "albedo": {"texture": UV_GRID, "uv": 3}}, "uv"),
+        ({"type": "phong", "kd": {"texture": UV_GRID, "factor": []}}, "materials.m.kd.factor: wrong length: got 0"),
+        ({"type": "lambert", "albedo": {"texture": "."}}, "materials.m.maps.albedo: texture is a directory"),
     ],
 )
 def test_what_cannot_be_mapped_is_refused_in_one_line(material, says, tmp_path):

@@ -351,6 +351,8 @@ def _first_error(exc: ValidationError, data: dict) -> str:
         return f"{field}: unknown or missing shape{hint}; allowed: {msg.split('allowed: ', 1)[-1]}"
     if kind == "missing" and loc and isinstance(loc[-1], int):
         vector, got = _walk(loc[:-1], data)
+        if isinstance(got, dict) and "factor" in got:  # a mapped colour (brdf.maps): the vector is its factor
+            vector, got = f"{vector}.factor", got["factor"]
         count = len(got) if isinstance(got, list) else "?"
         return f"{vector}: wrong length: got {count} values, needs at least {loc[-1] + 1}"
     if kind == "missing":
