@@ -172,10 +172,10 @@ def _gltf_material(name: str, m, textures: _Textures) -> tuple[dict, list[str]]:
 
 def _reads_second_set(material) -> bool:
     """A texture of this material (a scratched one's base) reads the second uv set."""
-    from .textures import TextureRef
+    from .textures import texture_refs
 
     source = material.base if material.type == "scratched" else material
-    return any(isinstance(ref, TextureRef) and ref.uv == 1 for ref in vars(source).values())
+    return any(ref.uv == 1 for ref in texture_refs(source).values())
 
 
 def _without_none(d: dict) -> dict:
@@ -262,15 +262,18 @@ def material_to_gltf(name: str, material) -> tuple[dict, list[str]]:
 def _mapped_colours(name: str, source, exported: dict, textures: _Textures) -> list[str]:
     """A library material's mapped colours (``brdf.maps``) as the slots its exported factors went to: the colour
     that became the base colour (the Lambertian albedo; a conductor's specular tint) its baseColorTexture, the
-    one that became KHR_materials_specular's tint its specularColorTexture (both sRGB, as glTF defines them)."""
+    one that became KHR_materials_specular's tint its specularColorTexture (both sRGB, as glTF defines them); a
+    texture with no slot (a translucent albedo map) noted."""
+    from .textures import texture_refs
+
     notes: list[str] = []
     conductor = source.type == "microfacet" and source.fresnel == "conductor"
     specular = exported.get("extensions", {}).get(SPECULAR)
-    for field, ref in getattr(source, "maps", {}).items():
-        where = f"{name}.{field}"
-        if field == ("specular" if conductor else source.lambertian_field):
+    for key, ref in texture_refs(source).items():  # a translucent albedo map too (no slot: noted)
+        mapped, field, where = key.startswith("maps."), key.removeprefix("maps."), f"{name}.{key}"
+        if mapped and field == ("specular" if conductor else source.lambertian_field):
             exported["pbrMetallicRoughness"]["baseColorTexture"] = textures.info(ref, True, where, notes)
-        elif specular is not None and not conductor:
+        elif mapped and specular is not None and not conductor:
             specular["specularColorTexture"] = textures.info(ref, True, where, notes)
         else:
             notes.append(f"{where}: its texture has no glTF slot in this export (its factor is written alone)")

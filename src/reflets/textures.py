@@ -285,6 +285,14 @@ def load_texture(ref: TextureRef, role_srgb: bool) -> TextureData:
     return decoded
 
 
+def texture_refs(material) -> dict[str, TextureRef]:
+    """A material's textures by field: its ``*_texture`` fields (glTF's, a translucent albedo map) and its mapped
+    colours (``maps.albedo``: ``brdf.maps``)."""
+    refs = {key: getattr(material, key) for key in type(material).model_fields}
+    refs = {key: ref for key, ref in refs.items() if isinstance(ref, TextureRef)}
+    return {**refs, **{f"maps.{key}": ref for key, ref in (getattr(material, "maps", None) or {}).items()}}
+
+
 def lookup(ref: TextureRef, data: TextureData, uv: np.ndarray, field: str) -> np.ndarray:
     """(N, 4) texels of ``data`` (``ref`` decoded) at mesh uv: (N, 4) both uv sets (``MeshData.uv_sets``), or (N, 2)
     the first alone; ``field`` names the parameter in the error for a missing second set."""

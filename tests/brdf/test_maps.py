@@ -157,3 +157,25 @@ def test_mapped_colours_are_exported_in_their_gltf_slots(tmp_path):
     assert any(np.array_equal(m.texture_data("base_color_texture").codes, original.codes) for m in floors)
     floor = next(m for m in floors if m.base_color_texture.transform is not None)
     assert floor.base_color[:3] == pytest.approx((0.9, 0.9, 0.9)) and floor.base_color_texture.transform.scale == (3, 3)
+
+
+def test_a_map_on_the_second_uv_set_exports_that_set_and_a_translucent_albedo_map_is_noted(tmp_path):
+    """A mapped colour reading uv set 1 of a sphere (one set: it reads the first) gets TEXCOORD_1 in the file, as a
+    glTF texture on set 1 does; a translucent albedo map has no glTF slot: said, not dropped silently."""
+    import pygltflib
+
+    from reflets.gltf import export_gltf
+
+    scene = reflets.load_dict({
+        "camera": {"position": [0, 1, 3], "look_at": [0, 0, 0], "size": [32, 24]},
+        "materials": {"m": {"type": "lambert", "albedo": {"texture": UV_GRID, "uv": 1}},
+                      "t": {"type": "translucent", "preset": "marble", "albedo_texture": {"texture": UV_GRID}}},
+        "mesh": [{"shape": "sphere", "radius": 0.5, "material": "m"},
+                 {"shape": "sphere", "radius": 0.5, "material": "t", "transform": {"translate": [1, 0, 0]}}],
+        "light": [POINT],
+    })  # fmt: skip
+    path, notes = export_gltf(scene, tmp_path / "out.glb")
+    document = pygltflib.GLTF2.load(str(path))
+    assert document.materials[0].pbrMetallicRoughness.baseColorTexture.texCoord == 1
+    assert document.meshes[0].primitives[0].attributes.TEXCOORD_1 is not None
+    assert "t.albedo_texture: its texture has no glTF slot in this export (its factor is written alone)" in notes

@@ -209,6 +209,7 @@ def _check_files(scene: Scene, source) -> None:
 def _check_uv_sets(scene: Scene) -> None:
     """A texture on the second uv set of a mesh that has one (a procedural shape, an OBJ or PLY file, a glTF
     primitive without TEXCOORD_1) reads the first: one warning line per mesh."""
+    from ..textures import texture_refs
     from .geometry import mesh_data
 
     for i, mesh in enumerate(scene.mesh):
@@ -230,6 +231,7 @@ def _check_textures(scene: Scene, name: str, material, source) -> None:
     """Texture paths made absolute (materials resolve them without the scene) and present; images of a glTF file
     must exist in it. A material's own base material (a scratched one's) likewise."""
     from ..brdf.base import Material
+    from ..textures import texture_refs
 
     base = getattr(material, "base", None)
     if isinstance(base, Material):
@@ -260,15 +262,6 @@ def _check_textures(scene: Scene, name: str, material, source) -> None:
             material.texture_data(field)
         except SceneError as exc:
             raise SceneError(exc.message, file=exc.file, field=f"materials.{name}.{key}") from None
-
-
-def texture_refs(material) -> dict:
-    """A material's textures by field: its ``*_texture`` fields (glTF's) and its mapped colours (``maps.albedo``)."""
-    from ..textures import TextureRef
-
-    refs = {key: getattr(material, key) for key in type(material).model_fields}
-    refs = {key: ref for key, ref in refs.items() if isinstance(ref, TextureRef)}
-    return {**refs, **{f"maps.{key}": ref for key, ref in (getattr(material, "maps", None) or {}).items()}}
 
 
 def did_you_mean(word: str, choices) -> str:
