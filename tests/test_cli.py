@@ -6,10 +6,12 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+import reflets
 from reflets.cli import main
 from reflets.imageio import read_image, write_image
 
@@ -267,3 +269,17 @@ def test_minimal_scene_renders_from_a_fresh_process_in_under_five_seconds(tmp_pa
     elapsed = time.perf_counter() - start
     assert proc.returncode == 0, proc.stderr
     assert elapsed < 5.0
+
+
+def test_an_output_never_replaces_an_image_or_buffer_a_gltf_names(capsys, tmp_path):
+    """A .gltf's textures live in files it names by uri: `render model.gltf -o sheen.png` used to write over one."""
+    import shutil
+
+    source = Path(__file__).parent / "data" / "gltf" / "SheenTest"
+    for name in ("SheenTest.gltf", "SheenTest.bin", "sheen.png"):
+        shutil.copy(source / name, tmp_path / name)
+    before = (tmp_path / "sheen.png").read_bytes()
+    code, _, err = run_cli(capsys, "render", str(tmp_path / "SheenTest.gltf"), "-o", str(tmp_path / "sheen.png"))
+    assert code == 2 and "own input files" in err and len(err.strip().splitlines()) == 1, err
+    assert (tmp_path / "sheen.png").read_bytes() == before
+    assert tmp_path / "SheenTest.bin" in reflets.load_scene(tmp_path / "SheenTest.gltf").input_files()

@@ -93,8 +93,10 @@ def test_a_gltf_image_in_a_file_it_names_is_read_again_when_that_file_changes(tm
 
     from PIL import Image
 
+    import reflets
     from reflets import textures
     from reflets.gltf_file import read_gltf
+    from reflets.scene.geometry import mesh_data
     from reflets.textures import TextureRef, load_texture
 
     def touch(path: Path) -> None:
@@ -114,5 +116,14 @@ def test_a_gltf_image_in_a_file_it_names_is_read_again_when_that_file_changes(tm
     again = load_texture(ref, False)
     assert again is not first and np.all(again.codes == 77) and len(reads) == 1
     document = read_gltf(tmp_path / "SheenTest.gltf")
+    scene = reflets.load_scene(tmp_path / "SheenTest.gltf")
+    vertices = mesh_data(scene, 0).positions.copy()
+    blob = bytearray((tmp_path / "SheenTest.bin").read_bytes())
+    view = document.doc.bufferViews[document.doc.accessors[document.doc.meshes[0].primitives[0].attributes.POSITION]
+                                     .bufferView]  # fmt: skip
+    positions = np.frombuffer(blob, np.float32, count=3, offset=view.byteOffset or 0)
+    blob[view.byteOffset or 0 : (view.byteOffset or 0) + 12] = (positions + 1.0).astype(np.float32).tobytes()
+    (tmp_path / "SheenTest.bin").write_bytes(bytes(blob))
     touch(tmp_path / "SheenTest.bin")
     assert read_gltf(tmp_path / "SheenTest.gltf") is not document
+    assert not np.array_equal(mesh_data(scene, 0).positions, vertices)  # the mesh built again from the edited .bin

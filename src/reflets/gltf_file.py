@@ -123,12 +123,8 @@ class GltfFile:
     def external_stamp(self) -> tuple:
         """(path, size, modification time) of every file the document's buffers and images name by uri (None for
         one missing): read_gltf's cache and the textures' see an edited .bin or image file by it."""
-        uris = [item.uri for item in (*(self.doc.buffers or []), *(self.doc.images or [])) if item.uri]
         stamp = []
-        for uri in uris:
-            if uri.startswith("data:"):
-                continue
-            target = self.path.parent / urllib.parse.unquote(uri)
+        for target in self.external_files():
             try:
                 stat = target.stat()
                 stamp.append((str(target), stat.st_size, stat.st_mtime_ns))
@@ -136,13 +132,21 @@ class GltfFile:
                 stamp.append((str(target), None, None))
         return tuple(stamp)
 
+    def external_files(self) -> list[Path]:
+        """The files the document's buffers and images name by uri (not data: URIs), resolved."""
+        uris = [item.uri for item in (*(self.doc.buffers or []), *(self.doc.images or [])) if item.uri]
+        return [self._uri_path(uri) for uri in uris if not uri.startswith("data:")]
+
+    def _uri_path(self, uri: str) -> Path:
+        return self.path.parent / urllib.parse.unquote(uri)
+
     def _read_uri(self, uri: str, where: str) -> bytes:
         if uri.startswith("data:"):
             try:
                 return base64.b64decode(uri.split(",", 1)[1], validate=True)
             except (IndexError, ValueError):
                 raise SceneError(f"{where}: invalid data URI", file=self.path) from None
-        target = self.path.parent / urllib.parse.unquote(uri)
+        target = self._uri_path(uri)
         try:
             return target.read_bytes()
         except OSError as exc:

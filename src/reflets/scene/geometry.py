@@ -62,6 +62,10 @@ def _mesh_key(scene: Scene, index: int) -> tuple | None:
             except OSError:
                 return None  # let the build report the missing file
             files.append((str(scene.resolve(path)), stat.st_size, stat.st_mtime_ns))
+            if scene.resolve(path).suffix.lower() == ".gltf":  # and the .bin it names (an edited one: built again)
+                from ..gltf_file import read_gltf
+
+                files.append(read_gltf(scene.resolve(path)).stamp)
     orientation = getattr(scene.materials.get(mesh.material), "orientation", None)
     if orientation is not None:  # the material's field replaces the tangents
         try:

@@ -464,7 +464,8 @@ class Scene(Strict):
 
     def input_files(self) -> set[Path]:
         """Every file the scene reads — mesh and height-field files, textures, light masks, environment maps,
-        measured BRDFs, orientation fields: each a ``Path`` field —, resolved. An output must not replace one."""
+        measured BRDFs, orientation fields: each a ``Path`` field; a .gltf file's buffers and images —, resolved.
+        An output must not replace one."""
         found: set[Path] = set()
 
         def walk(value) -> None:
@@ -478,6 +479,14 @@ class Scene(Strict):
                     walk(item)
 
         walk(self.model_dump(exclude_none=True))
+        for path in [p for p in found if p.suffix.lower() == ".gltf"]:  # and the .bin / images it names by uri
+            from ..errors import SceneError
+            from ..gltf_file import read_gltf
+
+            try:
+                found.update(target.resolve() for target in read_gltf(path).external_files())
+            except SceneError:
+                pass  # reading the scene says what is wrong with it
         return found
 
     def resolve(self, path: Path) -> Path:
