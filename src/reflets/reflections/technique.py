@@ -46,7 +46,7 @@ from ..scene.model import CylinderMesh, PlaneMesh, PolygonLight, QuadLight, Scen
 from ..scene.surfaces import SampledSurface
 from ..scratches.lobes import LOBE_FLAGS, ScratchLobes
 from ..techniques.base import register_technique
-from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams
+from ..techniques.forward import LIGHT_FLAGS, Forward, ForwardParams, bind_material_textures
 from ..techniques.shading import shading_for
 from ..techniques.shadows import SHADOW_SAMPLERS
 from .scene import canonical_surface
@@ -479,10 +479,7 @@ class Fermat(Forward):
                 **ScratchLobes.frame_uniforms(frame, seed),  # reflected scratched meshes sample per frame
             }
             for program, vao, uniforms, textures in draws:
-                samplers = {}
-                for unit, (name, texture) in enumerate(textures.items(), start=1):
-                    texture.use(unit)
-                    samplers[name] = unit
+                samplers = bind_material_textures(textures)
                 set_uniforms(program, {**uniforms, **samplers, **common})
                 vao.render()
             # composite onto the image: additive, no depth test

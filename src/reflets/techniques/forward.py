@@ -175,9 +175,21 @@ def samples_per_pixel_side(spp: int) -> int:
     return s
 
 
-#: the texture units of a transmissive draw's frame copy (colour, depth): above the material textures (1–8), the
-#: shadow maps (10–16) and the prefiltered environment (17, 18)
+#: the texture units of a transmissive draw's frame copy (colour, depth): above the shadow maps (10, 11, 16), Fermat's
+#: G-buffer (12–15) and the prefiltered environment (17, 18)
 BEHIND_UNITS = (19, 20)
+#: the units of a material's own textures (its maps, tables…), around the fixed ones above: a glTF material may
+#: have 15 textures and its tables (unit 0: the environment or a cut-out's base colour)
+MATERIAL_UNITS = (*range(1, 10), *range(21, 48))
+
+
+def bind_material_textures(textures: dict) -> dict[str, int]:
+    """Bind a draw's material textures to :data:`MATERIAL_UNITS`; their sampler uniforms."""
+    if len(textures) > len(MATERIAL_UNITS):  # a glTF material has at most 15 textures and 3 tables
+        raise RuntimeError(f"{len(textures)} textures in one draw; at most {len(MATERIAL_UNITS)} units")
+    for unit, texture in zip(MATERIAL_UNITS, textures.values(), strict=False):
+        texture.use(unit)
+    return dict(zip(textures, MATERIAL_UNITS, strict=False))
 
 
 @dataclass(frozen=True)
@@ -544,11 +556,7 @@ class Forward(Technique):
         for texture in draw.filtered:  # shared textures: set once (each set binds the texture)
             if texture.anisotropy != self.params.texture_anisotropy:
                 texture.anisotropy = self.params.texture_anisotropy
-        samplers = {}
-        textures = {**draw.material_textures, **draw.own_textures}
-        for unit, (name, texture) in enumerate(textures.items(), start=1):  # unit 0: environment
-            texture.use(unit)
-            samplers[name] = unit
+        samplers = bind_material_textures({**draw.material_textures, **draw.own_textures})
         shading_frame = draw.shading.frame_uniforms(frame, seed) if draw.shading is not None else {}
         set_uniforms(draw.program, {**draw.uniforms, **samplers, **per_frame, **shading_frame})
         draw.vao.render()

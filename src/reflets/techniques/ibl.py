@@ -46,7 +46,7 @@ SOURCE_SIZE = (128, 64)
 ALBEDO_NODES = 32
 ALBEDO_SAMPLES = 4096
 #: texture units of the prefiltered and irradiance maps
-IBL_UNITS = (18, 17)  # above the material textures (units 1–8) and the other passes' (10–16)
+IBL_UNITS = (18, 17)  # among the fixed units (forward.MATERIAL_UNITS go around them)
 #: compile-time flags of the IBL code in lights.glsl
 IBL_FLAGS = frozenset({"ENV_IBL", "IBL_LEVELS", "IBL_NODES"})
 
