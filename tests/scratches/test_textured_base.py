@@ -11,20 +11,12 @@ from PIL import Image
 import reflets
 from reflets.metrics import relmse
 
-BASES = {  # a textured base, and what it is without its texture
-    "gltf": ({"type": "gltf", "metallic": 0.6, "roughness": 0.35,
-              "base_color_texture": {"texture": "checker.png", "filter": "nearest"}},
-             {"type": "gltf", "metallic": 0.6, "roughness": 0.35}),
-}  # fmt: skip
 
-
-@pytest.mark.parametrize("kind", BASES)
-def test_scratches_over_a_textured_base(kind, tmp_path):
+def test_scratches_over_a_textured_gltf_base(tmp_path):
     checker = (np.indices((8, 8)).sum(axis=0) % 2 * 200 + 40).astype(np.uint8)
     Image.fromarray(np.dstack([checker, checker // 2, 255 - checker]), "RGB").save(tmp_path / "checker.png")
-    base, untextured = BASES[kind]
-    texture = next(key for key, value in base.items() if isinstance(value, dict))
-    base = {**base, texture: {**base[texture], "texture": str(tmp_path / "checker.png")}}
+    untextured = {"type": "gltf", "metallic": 0.6, "roughness": 0.35}
+    base = {**untextured, "base_color_texture": {"texture": str(tmp_path / "checker.png"), "filter": "nearest"}}
 
     def scene(coverage, material=base):
         scratched = {"type": "scratched", "preset": "3.14d", "profile": "quartic:0.5", "coverage": coverage,
@@ -48,7 +40,7 @@ def test_scratches_over_a_textured_base(kind, tmp_path):
                                atol=1e-7)  # fmt: skip
     assert weight < 0.99
     scratched = reflets.render(covered, method="scratches")
-    assert relmse(reflets.render(scene(0.02, untextured), method="scratches"), scratched) > 0.03  # measured 0.35
+    assert relmse(reflets.render(scene(0.02, untextured), method="scratches"), scratched) > 0.1  # measured 0.35
 
 
 def test_a_cut_out_or_blended_glTF_base_is_refused_in_one_line():

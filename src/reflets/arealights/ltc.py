@@ -238,7 +238,7 @@ def material_key(material, n_theta: int = INSTANCE_SIZE, base_power: int = 1) ->
     """Hash of everything a one-material table depends on (the fitter's source included: a changed fitter
     refits)."""
     data = {
-        "material": material.model_dump(mode="json", exclude={"maps"}),  # the factors: what the integrals read
+        "material": material.constant_dump(),
         "fitter": _fitter_hash(),
         "n_theta": n_theta,
         "settings": ltc_fit.FitSettings(base_power=base_power).__dict__,

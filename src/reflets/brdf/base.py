@@ -55,6 +55,13 @@ class Material(BaseModel):
     #: package path of the GLSL twin, e.g. "reflets/brdf/glsl/lambert.glsl"
     glsl: ClassVar[str]
 
+    def constant_dump(self) -> dict:
+        """The material without its textures (mapped colours, texture fields): what per-material integrals — LTC
+        fits, albedo curves — read, hence their cache keys (the same for every texture of the same factors)."""
+        from ..textures import texture_refs
+
+        return self.model_dump(mode="json", exclude={"maps", *(key.split(".")[0] for key in texture_refs(self))})
+
     @property
     def brdf_source(self) -> str:
         """What a shading pass includes as its BRDF slot: ``glsl``, or a twin made for these parameters (mapped
@@ -150,7 +157,7 @@ class Material(BaseModel):
         """The area-light methods' per-material integrals (LTC, analytic, biased) stand for it: constant
         parameters, a lobe their tables fit. ``ltc`` reads a textured glTF material per fragment instead
         (``fragment_ltc``); the other methods, and ``ltc`` for an anisotropic lobe, leave it to ``forward``."""
-        return True
+        return not self.textured
 
     @property
     def fragment_ltc(self) -> bool:
@@ -194,6 +201,23 @@ class Material(BaseModel):
     def emission(self, uv: np.ndarray) -> np.ndarray:
         """Emitted radiance (N, 3) at mesh uv (as :meth:`at`)."""
         return np.zeros((len(uv), 3))
+
+
+class PointsBRDF:
+    """A material at N surface points (what :meth:`Material.at` may return): ``eval`` by the points' own parameters
+    (``evaluate``), ``sample`` / ``pdf`` by a material (``sampled``) whose densities cover every point's BRDF."""
+
+    def __init__(self, evaluate, sampled):
+        self.evaluate, self.sampled = evaluate, sampled
+
+    def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        return self.evaluate(wo, wi)
+
+    def sample(self, wo: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return self.sampled.sample(wo, u1, u2)
+
+    def pdf(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
+        return self.sampled.pdf(wo, wi)
 
 
 def register_material(cls: type[Material]) -> type[Material]:

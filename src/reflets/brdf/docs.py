@@ -91,7 +91,7 @@ PROPERTIES = {
 MAPS = {
     "microfacet": "`diffuse`, `specular` (not a Schlick F₀)",
     "gltf": "every factor (its `*_texture` slots)",
-    "scratched": "its base's",
+    "scratched": "a glTF base's textures (a base with mapped colours is refused)",
     "translucent": "`albedo_texture`: the light leaving the medium × its texel",
 }
 

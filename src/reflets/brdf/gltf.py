@@ -436,7 +436,7 @@ class Gltf(Material):
 
     @property
     def tabulated(self) -> bool:
-        return not (self.textured or self.anisotropic)
+        return super().tabulated and not self.anisotropic
 
     @property
     def transmissive(self) -> bool:

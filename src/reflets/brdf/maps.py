@@ -31,15 +31,13 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from ..textures import TextureRef, load_texture, lookup
-from .base import Material
+from .base import Material, PointsBRDF
 
 
 class Mapped(Material):
     """A material of the BRDF library whose colours may be texture maps (module docstring)."""
 
-    maps: dict[str, TextureRef] = Field(
-        default_factory=dict, description="colour parameters read from textures (× the field's value)"
-    )
+    maps: dict[str, TextureRef] | None = Field(None, description="colour parameters read from textures (× the field)")
     #: the colour scaling everything but the Lambertian part, linearly per channel (None: none, or not linearly)
     linear_specular: ClassVar[str | None] = None
 
@@ -86,17 +84,13 @@ class Mapped(Material):
     def textured(self) -> bool:
         return bool(self.maps)
 
-    @property
-    def tabulated(self) -> bool:
-        return not self.maps and super().tabulated
-
     def at(self, uv: np.ndarray, frames=None):
         """The material at mesh uv: its BRDF with per-point colours (factor × texel), sampled as the factors are
         (the lobes' shapes do not vary, so the factors' densities cover every point's BRDF)."""
         if not self.maps:
             return self
         colours = {field: np.asarray(getattr(self, field), np.float64) * self.texels(field, uv) for field in self.maps}
-        return MappedPoints(self.model_construct(**{**dict(self), **colours}), self)
+        return PointsBRDF(self.model_construct(**{**dict(self), **colours}).eval, self)
 
     def texels(self, field: str, uv: np.ndarray) -> np.ndarray:
         """(N, 3) texels of a mapped field at mesh uv (as :meth:`at`)."""
@@ -148,7 +142,7 @@ class Mapped(Material):
             *surface,
             "}",
             "// the prefiltered environment's albedos (of the factors) scaled by the texels: exact for linear colours",
-            "void material_ibl_scale(float mu, vec3 untinted, inout vec3 diffuse_albedo, inout vec3 albedo) {",
+            "void material_ibl_scale(vec3 untinted, inout vec3 diffuse_albedo, inout vec3 albedo) {",
             *scale,
             "}",
             '#include "reflets/brdf/glsl/surface_hooks.glsl"',
@@ -159,20 +153,5 @@ class Mapped(Material):
     def textures(self, ctx) -> dict[str, object]:
         from ..textures import texture_for
 
-        return {f"m_map_{field}": texture_for(ctx, self.texture_data(field)) for field in self.maps}
+        return {f"m_map_{field}": texture_for(ctx, self.texture_data(field)) for field in self.maps or {}}
 
-
-class MappedPoints:
-    """A mapped material at N points: ``eval`` with the points' colours, ``sample`` / ``pdf`` by the factors."""
-
-    def __init__(self, points: Mapped, factors: Mapped):
-        self.points, self.factors = points, factors
-
-    def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
-        return self.points.eval(wo, wi)
-
-    def sample(self, wo: np.ndarray, u1: np.ndarray, u2: np.ndarray):
-        return self.factors.sample(wo, u1, u2)
-
-    def pdf(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
-        return self.factors.pdf(wo, wi)

@@ -61,13 +61,11 @@ def _digest(description: dict) -> str:
 
 def _volumetric_material(material: dict) -> dict:
     """A material as the volumetric reference sees it: fields left unset (None: added later, optional) dropped,
-    in nested materials too (a scratched material's base), empty texture maps (added later: ``maps = {}``), and a
-    translucent material's real-time model (its diffusion ``profile``, ``single_scattering``) — the path tracer
-    simulates the medium itself."""
+    in nested materials too (a scratched material's base), and a translucent material's real-time model (its
+    diffusion ``profile``, ``single_scattering``) — the path tracer simulates the medium itself."""
     real_time = ("profile", "single_scattering") if material.get("type") == "translucent" else ()
     return {k: _volumetric_material(v) if isinstance(v, dict) and "type" in v else v
-            for k, v in material.items()
-            if v is not None and k not in real_time and not (k == "maps" and not v)}  # fmt: skip
+            for k, v in material.items() if v is not None and k not in real_time}  # fmt: skip
 
 
 #: camera fields at their defaults (added after references were stored: the same image)

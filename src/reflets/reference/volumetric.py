@@ -331,8 +331,10 @@ def render_volumetric(
         with Progress(disable=not progress, transient=True) as bar:
             task = bar.add_task(job.label, total=spp)
             total, total2 = job.sums(spp, np.random.default_rng(seed), lambda k: bar.advance(task, k))
-    mean = total / spp * job.tint
-    var = np.maximum(total2 / spp - (total / spp) ** 2, 0.0) / max(spp - 1, 1) * job.tint**2
+    # an albedo map: the light leaving the medium towards the camera × its texel where it leaves (the camera hit)
+    tint = job.material.tint(job.geometry.uv_sets(job.hits.prim[job.pix], job.hits.u[job.pix], job.hits.v[job.pix]))
+    mean = total / spp * tint
+    var = np.maximum(total2 / spp - (total / spp) ** 2, 0.0) / max(spp - 1, 1) * tint**2
     h, w = job.shape
     image = np.zeros((h * w, 3), np.float32)
     err = np.zeros((h * w, 3), np.float32)
@@ -376,9 +378,7 @@ class _VolumetricJob:
         self.mask = self.hits.kind == MESHES
         self.pix = np.nonzero(self.mask)[0]
         self.entry = origin + self.dirs[self.pix] * self.hits.t[self.pix, None]
-        # an albedo map: the light leaving the medium towards the camera × its texel where it leaves (the camera hit)
-        self.tint = material.tint(self.geometry.uv_sets(self.hits.prim[self.pix], self.hits.u[self.pix],
-                                                        self.hits.v[self.pix]))  # fmt: skip
+        self.material = material
         self.refracting = abs(material.eta - 1.0) > 1e-9 if refract is None else refract
         self.label = "volumetric reference" + (" (refracting boundary)" if self.refracting else "")
 

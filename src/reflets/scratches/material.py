@@ -37,7 +37,6 @@ Tables and α maps are cached in memory and on disk under ``$XDG_CACHE_HOME/refl
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, ClassVar, Literal, Union
 
@@ -45,7 +44,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from ..brdf.ashikhmin_shirley import AshikhminShirley
-from ..brdf.base import LIGHT_TYPES, RGB, Material, Oriented, register_material
+from ..brdf.base import LIGHT_TYPES, RGB, Material, Oriented, PointsBRDF, register_material
 from ..brdf.blinn_phong import BlinnPhong
 from ..brdf.gltf import Gltf
 from ..brdf.lafortune import Lafortune
@@ -291,7 +290,8 @@ class Scratched(Oriented, Material):
         """The finite part at mesh uv: the base there (its textures), weighted by its uncovered share."""
         if not self.base.textured:
             return self
-        return _WeightedBase(self.base.at(uv, frames), self.base_weight())
+        base, weight = self.base.at(uv, frames), self.base_weight()
+        return PointsBRDF(lambda wo, wi: weight * base.eval(wo, wi), base)
 
     def shading_frame(self, frame: np.ndarray, uv: np.ndarray) -> np.ndarray:
         return self.base.shading_frame(frame, uv)
@@ -454,23 +454,6 @@ def bake_layer(k: int, angle: float, material: Scratched) -> np.ndarray:
         total += np.bincount(index[inside], weights=w[inside], minlength=R * R)
     texel = 1.0 / (R * R)
     return (1.0 - np.exp(-total / texel)).reshape(R, R)
-
-
-@dataclass
-class _WeightedBase:
-    """A scratched material's finite part at N points: the base's per-point BRDF × its uncovered share."""
-
-    base: object
-    weight: float
-
-    def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
-        return self.weight * self.base.eval(wo, wi)
-
-    def sample(self, wo, u1, u2):
-        return self.base.sample(wo, u1, u2)
-
-    def pdf(self, wo, wi):
-        return self.base.pdf(wo, wi)
 
 
 def mip_levels(base: np.ndarray) -> list[np.ndarray]:

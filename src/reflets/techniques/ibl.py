@@ -120,7 +120,7 @@ def cached_specular_albedo(material) -> np.ndarray:
     counts and the source of its model, of the BRDF base and of this module (a measured table: its file stamp)."""
     module = sys.modules[type(material).__module__].__file__
     data = {
-        "material": material.model_dump(mode="json", exclude={"maps"}),  # the factors: what the integrals read
+        "material": material.constant_dump(),
         "nodes": ALBEDO_NODES,
         "samples": ALBEDO_SAMPLES,
         "code": _source_hash(module),
@@ -197,12 +197,13 @@ class PrefilteredEnvironment:
         }
         if material.fragment_ibl:
             return maps
+        untinted = material.ibl_interface
         return {
             "u_ibl_albedo": cached_specular_albedo(material).astype(np.float32).tobytes(),
             "u_ibl_diffuse": tuple(float(c) for c in material.lambertian_split()[0]),
             "u_ibl_alpha": equivalent_alpha(material),
-            "u_ibl_untinted": (np.zeros((ALBEDO_NODES, 3)) if material.ibl_interface is None
-                                else cached_specular_albedo(material.ibl_interface)).astype(np.float32).tobytes(),
+            "u_ibl_untinted": (np.zeros((ALBEDO_NODES, 3)) if untinted is None
+                               else cached_specular_albedo(untinted)).astype(np.float32).tobytes(),
             **maps,
         }
 

@@ -18,12 +18,13 @@ represented by a BRDF). Coefficients are per millimetre; ``mm_per_unit`` convert
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Literal
 
 import numpy as np
 from pydantic import Field, model_validator
 
-from ..brdf.base import LIGHT_TYPES, RGB, Material, register_material, upper
+from ..brdf.base import LIGHT_TYPES, RGB, Material, PointsBRDF, register_material, upper
 from ..fresnel import fresnel_dielectric
 from ..textures import TextureRef, load_texture, lookup
 from .optics import beckmann_d, fresnel_transmittance
@@ -141,10 +142,6 @@ class Translucent(Material):
     def textured(self) -> bool:
         return self.albedo_texture is not None
 
-    @property
-    def tabulated(self) -> bool:
-        return not self.textured
-
     def texture_data(self, field: str = "albedo_texture"):
         """The decoded albedo map (colour: sRGB unless its ``srgb`` says otherwise)."""
         return load_texture(self.albedo_texture, True)
@@ -159,14 +156,14 @@ class Translucent(Material):
     def at(self, uv: np.ndarray, frames=None):
         """The far-field BRDF at mesh uv: its diffusion (subsurface) part × the albedo map, the interface's
         reflection as it is."""
-        return self if self.albedo_texture is None else _Tinted(self, self.tint(uv))
+        return self if self.albedo_texture is None else PointsBRDF(partial(self.eval, tint=self.tint(uv)), self)
 
     @property
     def ibl_interface(self):
         """The interface's reflection alone as a BRDF of the library (Beckmann, the dielectric's Fresnel; Smith's
         exact Λ where this model uses Walter's fit, < 0.6 % apart): the share of the split sum's albedo an albedo map
-        does not tint. None for a smooth interface (no glossy lobe)."""
-        if self.roughness <= 0.0:
+        does not tint. None without a map, or for a smooth interface (no glossy lobe)."""
+        if self.albedo_texture is None or self.roughness <= 0.0:
             return None
         from ..brdf.microfacet import Microfacet
 
@@ -221,21 +218,6 @@ class Translucent(Material):
 
         return {"m_albedo_map": texture_for(ctx, self.texture_data())}
 
-
-class _Tinted:
-    """A translucent material at N points of its albedo map: ``eval`` tinted there, sampled as the material."""
-
-    def __init__(self, material: Translucent, tint: np.ndarray):
-        self.material, self.tint = material, tint
-
-    def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
-        return self.material.eval(wo, wi, self.tint)
-
-    def sample(self, wo, u1, u2):
-        return self.material.sample(wo, u1, u2)
-
-    def pdf(self, wo, wi):
-        return self.material.pdf(wo, wi)
 
 
 def _beckmann_g1(cos_theta, m):
