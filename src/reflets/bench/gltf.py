@@ -59,7 +59,7 @@ def bench_gltf(quick: bool, out_dir) -> tuple[dict, str]:
     ridges, images, notes, webgl = {}, {}, [], ""
     for stem in ("53_spun_plate", "54_spun_plate_bent"):
         scene = reflets.load_scene(scene_path(f"{stem}.toml"))
-        glb, found = export_gltf(scene, out_dir / f"{stem}.glb")
+        glb, found = export_gltf(scene, out_dir / f"{stem}.glb", overwrite=True)  # one a stopped run left
         notes += found
         ours = tonemap(reflets.render(scene, method="forward", size=SIZE))
         webgl = _three(glb, out_dir / f"{stem}.three.png")

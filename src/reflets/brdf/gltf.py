@@ -461,8 +461,8 @@ class Gltf(Material):
     def fragment_ltc(self) -> bool:
         """Textured or not, save a constant sheen, which the one-material table fits better than the per-fragment
         path's Lambertian stand-in for it (a sphere under two quad lights against the reference: 0.06 % against
-        0.73 %; docs/assets.md). An anisotropic lobe is read as the isotropic one of the same area (as by the split
-        sum), so ``auto`` lights it by ``forward``."""
+        0.73 %; docs/techniques/area-lights.md). An anisotropic lobe is read as the isotropic one of the same area (as
+        by the split sum), so ``auto`` lights it by ``forward``."""
         return self.textured or self.unlit or self.transmissive or not self.sheened  # no table for a transmissive one
 
     def _anisotropy(self, direction: np.ndarray, strength: np.ndarray) -> np.ndarray:
