@@ -1,5 +1,7 @@
 """Texture maps against the reference: library materials with mapped colours (a Lambert floor, a Phong ball with a
-diffuse map, a conductor with a specular map) under a point + a quad light and under the studio map, and a striped
+diffuse map, a conductor with a specular map) under a point + a quad light and under the studio map; mapped lobe
+shapes (a conductor's roughness, a Phong exponent) under the same lights; normal maps and a mapped emission under a
+point + a quad light; and a striped
 translucent marble under a quad light, the studio map (rough interface) and a point light (against the volumetric
 reference) — each beside the same scene without its maps against its own reference (docs/assets.md). Relative MSE
 (reflets.metrics.relmse) on 4 × 4-pixel block means for the library scene (96 × 72), per pixel for the marble's
@@ -14,7 +16,17 @@ import tempfile
 
 import reflets
 from reflets.bench.assets import block_means as blocks
-from reflets.bench.maps import MARBLE_POINT, MARBLE_QUAD, POINT, QUAD, mapped_scene, striped_marble, unmapped
+from reflets.bench.maps import (
+    MARBLE_POINT,
+    MARBLE_QUAD,
+    POINT,
+    QUAD,
+    lobe_maps_scene,
+    mapped_scene,
+    striped_marble,
+    surface_maps_scene,
+    unmapped,
+)
 from reflets.metrics import relmse
 from reflets.scene.assets import default_environment
 
@@ -31,6 +43,15 @@ def main() -> None:
             error = relmse(blocks(reflets.render(scene, spp=16)), blocks(reference(scene, spp=32, pixel="box")))
             print(f"library materials, {name}, {label}: {error:.2e}")
     with tempfile.TemporaryDirectory() as directory:
+        both = {"point + quad": [POINT, QUAD], "studio map": [ENV]}
+        for kind, make, lighting in (("lobe shapes", lobe_maps_scene, both),
+                                     ("normal maps + emission", surface_maps_scene, {"point + quad": [POINT, QUAD]})):
+            for name, lights in lighting.items():
+                for mapped in (True, False):
+                    scene = make(directory, lights, maps=mapped)
+                    ref = reference(scene, spp=32, pixel="box")
+                    error = relmse(blocks(reflets.render(scene, spp=16)), blocks(ref))
+                    print(f"library {kind}, {name}, {'mapped' if mapped else 'unmapped'}: {error:.2e}")
         for name, light, roughness, engine in (("quad", MARBLE_QUAD, 0.0, "numpy"), ("studio map", ENV, 0.3, "numpy"),
                                                ("point", MARBLE_POINT, 0.0, "volumetric")):  # fmt: skip
             for mapped in (True, False):

@@ -260,18 +260,31 @@ def material_to_gltf(name: str, material) -> tuple[dict, list[str]]:
 
 
 def _mapped_colours(name: str, source, exported: dict, textures: _Textures) -> list[str]:
-    """A library material's mapped colours (``brdf.maps``) as the slots its exported factors went to: the colour
-    that became the base colour (the Lambertian albedo; a conductor's specular tint) its baseColorTexture, the
-    one that became KHR_materials_specular's tint its specularColorTexture (both sRGB, as glTF defines them); a
+    """A library material's maps (``brdf.maps``) in glTF's slots: the mapped colour that became the base colour
+    (the Lambertian albedo; a conductor's specular tint) its baseColorTexture, the one that became
+    KHR_materials_specular's tint its specularColorTexture (both sRGB, as glTF defines them); the normal and
+    occlusion maps, the emission (its factor over 1 by KHR_materials_emissive_strength) and its map in theirs; a
     texture with no slot (a translucent albedo map) noted."""
     from .textures import texture_refs
 
     notes: list[str] = []
     conductor = source.type == "microfacet" and source.fresnel == "conductor"
     specular = exported.get("extensions", {}).get(SPECULAR)
+    emission = getattr(source, "emission", None)
+    if emission is not None:
+        strength = max(1.0, float(max(emission)))
+        exported["emissiveFactor"] = [float(c) / strength for c in emission]
+        if strength > 1.0:
+            exported.setdefault("extensions", {})[EMISSIVE] = {"emissiveStrength": strength}
     for key, ref in texture_refs(source).items():  # a translucent albedo map too (no slot: noted)
         mapped, field, where = key.startswith("maps."), key.removeprefix("maps."), f"{name}.{key}"
-        if mapped and field == ("specular" if conductor else source.lambertian_field):
+        if key == "normal_map":
+            exported["normalTexture"] = textures.info(ref, False, where, notes) | {"scale": ref.scale}
+        elif key == "occlusion":
+            exported["occlusionTexture"] = textures.info(ref, False, where, notes) | {"strength": ref.strength}
+        elif mapped and field == "emission":
+            exported["emissiveTexture"] = textures.info(ref, True, where, notes)
+        elif mapped and field == ("specular" if conductor else source.lambertian_field):
             exported["pbrMetallicRoughness"]["baseColorTexture"] = textures.info(ref, True, where, notes)
         elif mapped and specular is not None and not conductor:
             specular["specularColorTexture"] = textures.info(ref, True, where, notes)

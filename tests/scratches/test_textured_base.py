@@ -54,11 +54,16 @@ def test_a_cut_out_or_blended_glTF_base_is_refused_in_one_line():
                                "mesh": [{"shape": "plane", "material": "s"}], "light": [light]})  # fmt: skip
 
 
-def test_a_base_with_mapped_colours_is_refused_in_one_line(tmp_path):
+@pytest.mark.parametrize(
+    ("maps", "named"),
+    [({"albedo": {"texture": "x.png"}}, "albedo"), ({"normal_map": {"texture": "x.png"}}, "normal_map"),
+     ({"emission": [1, 1, 1]}, "emission"), ({"occlusion": {"texture": "x.png"}}, "occlusion")],
+)
+def test_a_library_base_with_maps_or_emission_is_refused_in_one_line(maps, named, tmp_path):
     from reflets.errors import SceneError
 
-    base = {"type": "lambert", "albedo": {"texture": "x.png"}}
-    with pytest.raises(SceneError, match="materials.s: the base's colours cannot be texture maps \\(albedo\\)"):
+    says = f"materials.s: a library base takes no texture maps nor emission \\({named}\\)"
+    with pytest.raises(SceneError, match=says):
         reflets.load_dict({"camera": {"position": [0, 1, 2], "look_at": [0, 0, 0]},
-                           "materials": {"s": {"type": "scratched", "base": base}},
+                           "materials": {"s": {"type": "scratched", "base": {"type": "lambert", **maps}}},
                            "mesh": [{"shape": "plane", "material": "s"}]}, base_dir=tmp_path)  # fmt: skip

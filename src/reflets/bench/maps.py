@@ -63,3 +63,61 @@ def striped_marble(directory: str | Path, light: dict, size=(64, 48), mapped: bo
         "mesh": [{"shape": "sphere", "radius": 0.6, "material": "m"}],
         "light": [light],
     })  # fmt: skip
+
+
+def write_bumps(path: str | Path, size: int = 64, waves: int = 2, slope: float = 0.5) -> Path:
+    """A tangent-space normal map of the height field A sin(2π k u) sin(2π k v) (k = ``waves``, steepest slope
+    ``slope``), glTF's encoding (RGB = (n + 1) / 2, +y along increasing v; image row 0 at v = 1), written to
+    ``path``."""
+    u = (np.arange(size) + 0.5) / size
+    v = 1.0 - (np.arange(size) + 0.5) / size
+    uu, vv = np.meshgrid(u, v)  # rows: v from 1 down
+    k = 2.0 * np.pi * waves
+    dh_du = slope * np.cos(k * uu) * np.sin(k * vv)
+    dh_dv = slope * np.sin(k * uu) * np.cos(k * vv)
+    n = np.dstack([-dh_du, -dh_dv, np.ones_like(uu)])
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    Image.fromarray(np.rint((n + 1.0) * 0.5 * 255.0).astype(np.uint8)).save(path)
+    return Path(path)
+
+
+def surface_maps_scene(directory: str | Path, lights: list, size=(96, 72), maps: bool = True) -> Scene:
+    """The surface maps of library materials: a Lambert floor and a Phong ball with a normal map of bumps
+    (``write_bumps``, written to ``directory``), and a small ball whose emission is the uv grid; ``maps`` False: the
+    same without the normal maps."""
+    bumps = str(write_bumps(Path(directory) / "bumps.png"))
+    floor = {"type": "lambert", "albedo": [0.7, 0.7, 0.7]}
+    ball = {"type": "phong", "kd": [0.4, 0.3, 0.2], "ks": [0.4, 0.4, 0.4], "exponent": 30, "normalized": True}
+    if maps:
+        floor["normal_map"] = {"texture": bumps, "transform": {"scale": [3, 3]}}
+        ball["normal_map"] = {"texture": bumps, "scale": 0.8}
+    lamp = {"type": "lambert", "albedo": [0.2, 0.2, 0.2], "emission": {"texture": str(UV_GRID), "factor": [2, 2, 2]}}
+    return load_dict({
+        "camera": {"position": [0, 1.2, 3.2], "look_at": [0, 0.3, 0], "fov_y": 40, "size": list(size)},
+        "materials": {"floor": floor, "ball": ball, "lamp": lamp},
+        "mesh": [{"shape": "plane", "size": [4, 4], "material": "floor"},
+                 {"shape": "sphere", "radius": 0.5, "material": "ball", "transform": {"translate": [-0.5, 0.5, 0]}},
+                 {"shape": "sphere", "radius": 0.3, "material": "lamp", "transform": {"translate": [0.7, 0.3, 0.2]}}],
+        "light": lights,
+    })  # fmt: skip
+
+
+def lobe_maps_scene(directory: str | Path, lights: list, size=(96, 72), maps: bool = True) -> Scene:
+    """Lobe shapes read from a map of four grey bands (R 0.25 … 1, written to ``directory``): a GGX conductor's
+    roughness α (factor 0.6) and a Phong ball's exponent (factor 200); ``maps`` False: the factors alone."""
+    bands = np.repeat(np.array([64, 128, 191, 255], np.uint8), 4)[:, None].repeat(16, axis=1)
+    Image.fromarray(np.dstack([bands] * 3)).save(Path(directory) / "bands.png")
+    texture = str(Path(directory) / "bands.png")
+    metal = {"type": "microfacet", "fresnel": "conductor", "alpha": 0.6}
+    ball = {"type": "phong", "kd": [0.3, 0.2, 0.1], "ks": [0.5, 0.5, 0.5], "exponent": 200, "normalized": True}
+    if maps:
+        metal["alpha"] = {"texture": texture, "factor": 0.6}
+        ball["exponent"] = {"texture": texture, "factor": 200}
+    return load_dict({
+        "camera": {"position": [0, 1.2, 3.2], "look_at": [0, 0.3, 0], "fov_y": 40, "size": list(size)},
+        "materials": {"floor": {"type": "lambert", "albedo": [0.5, 0.5, 0.5]}, "ball": ball, "metal": metal},
+        "mesh": [{"shape": "plane", "size": [4, 4], "material": "floor"},
+                 {"shape": "sphere", "radius": 0.5, "material": "ball", "transform": {"translate": [-0.6, 0.5, 0]}},
+                 {"shape": "sphere", "radius": 0.5, "material": "metal", "transform": {"translate": [0.6, 0.5, 0]}}],
+        "light": lights,
+    })  # fmt: skip

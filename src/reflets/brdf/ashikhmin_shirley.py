@@ -134,7 +134,7 @@ class AshikhminShirley(HalfVectorLobeMixture, Oriented, Mapped):
         safe = np.where(ok[..., None], u, [0.0, 0.0, 1.0])
         return np.where(ok, self.norm / (2.0 * np.pi) * np.exp(log_lobe(safe, self.nu, self.nv)), 0.0)
 
-    def uniforms(self) -> dict[str, object]:
+    def brdf_uniforms(self) -> dict[str, object]:
         return {
             "m_rs": tuple(self.rs),
             "m_rd": tuple(self.rd),

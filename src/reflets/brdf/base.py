@@ -198,7 +198,7 @@ class Material(BaseModel):
         them."""
         return frame
 
-    def emission(self, uv: np.ndarray) -> np.ndarray:
+    def emitted(self, uv: np.ndarray) -> np.ndarray:
         """Emitted radiance (N, 3) at mesh uv (as :meth:`at`)."""
         return np.zeros((len(uv), 3))
 
@@ -331,6 +331,19 @@ def reflect_or_fail(wo: np.ndarray, h: np.ndarray) -> np.ndarray:
     density change p(wi) = p(h)/(4 wo·h) only holds for the half vector of wo and wi."""
     wi = reflect(wo, h)
     return np.where((np.sum(wo * h, axis=-1) > 0)[..., None], wi, np.nan)
+
+
+def perturbed_frame(frame: np.ndarray, local_normal: np.ndarray) -> np.ndarray:
+    """A frame whose normal is ``local_normal`` (N, 3) expressed in ``frame`` (a tangent-space normal map), with
+    the tangent re-orthogonalised against it and the bitangent's handedness kept (GLSL ``shading_frame``)."""
+    t, b, n = frame[..., 0], frame[..., 1], frame[..., 2]
+    new_n = normalize(local_normal[:, :1] * t + local_normal[:, 1:2] * b + local_normal[:, 2:3] * n)
+    new_t = t - new_n * np.sum(new_n * t, axis=-1, keepdims=True)
+    length = np.linalg.norm(new_t, axis=-1, keepdims=True)
+    fallback, _ = orthonormal_basis(new_n)
+    new_t = np.where(length > 1e-6, new_t / np.maximum(length, 1e-300), fallback)
+    sign = np.where(np.sum(np.cross(n, t) * b, axis=-1, keepdims=True) < 0, -1.0, 1.0)
+    return np.stack([new_t, sign * np.cross(new_n, new_t), new_n], axis=-1)
 
 
 def luminance(rgb) -> float:

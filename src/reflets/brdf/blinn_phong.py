@@ -93,7 +93,7 @@ class BlinnPhong(HalfVectorLobeMixture, Mapped):
     def pdf_half_vector(self, h: np.ndarray) -> np.ndarray:
         return pdf_power_cosine(_Z, self.exponent, h)
 
-    def uniforms(self) -> dict[str, object]:
+    def brdf_uniforms(self) -> dict[str, object]:
         return {
             "m_kd": tuple(self.kd),
             "m_ks": tuple(self.ks),

@@ -49,23 +49,34 @@ anisotropically oriented sphere (tests/test_gpu_vs_reference.py).
 ## Texture maps
 
 A colour the BRDF is linear in — the Lambertian albedo and the colour scaling the rest — may be read from an image,
-multiplied by a factor (the field's value; default 1), as glTF's factors and textures are (`reflets.brdf.maps`):
+multiplied by a factor (the field's value; default 1), as glTF's factors and textures are (`reflets.brdf.maps`); so
+may the lobe shapes the GLSL twins read as they are (the microfacet roughness `alpha`, Phong's `exponent`: factor ×
+the texel's R); and every library material takes a normal map, an emission and an ambient occlusion map:
 
 ```toml
 [materials.wood]
 type = "phong"
 kd = { texture = "wood.png", factor = [0.9, 0.9, 0.9], transform = { scale = [4, 4] } }
 ks = [0.04, 0.04, 0.04]
+exponent = { texture = "wood_gloss.png", factor = 200 }
+normal_map = { texture = "wood_normal.png", scale = 1.0 }
+emission = { texture = "embers.png", factor = [3, 1, 0.2] }
+occlusion = { texture = "wood_ao.png", strength = 1.0 }
 ```
 
 The other keys are a texture's (`uv`, `srgb`, `transform`, `wrap`, `filter`, `channels`: docs/assets.md,
-*Textures*). Both renderers read the texels into the colour before evaluating the BRDF (GPU: `material_surface`,
-trilinear and anisotropic mips; reference: bilinear lookups at each hit, averaged over a supersampled pixel), and
-the prefiltered environment scales the albedos by the texels — exact for a linear colour. Lobe shapes (exponents,
-roughness) and colours the BRDF is not linear in (a Schlick F₀) are refused with the list of what can be mapped:
-glTF's material (`type = "gltf"`) maps roughness, metalness and the rest. The area-light methods that integrate
-constant colours (`ltc`, `analytic`, `biased`) leave a mapped material to `forward` in `auto` (asked for by name,
-they integrate the factors and say so).
+*Textures*). Both renderers read the texels into the parameters before evaluating the BRDF (GPU: `material_surface`,
+trilinear and anisotropic mips; reference: bilinear lookups at each hit, averaged over a supersampled pixel). The
+prefiltered environment scales the albedos by a colour map's texels — exact for a linear colour — and, for a mapped
+lobe shape, interpolates albedo curves and prefiltered levels computed at eight texel values. A normal map (glTF's
+encoding) turns the shading frame in both renderers; emission adds to every pass; occlusion darkens the
+environment's light only (glTF's rule; the references trace occlusion themselves). Other lobe shapes (Blinn-Phong's
+exponent, whose normalisation is computed in float64 outside the twin; Ward's and Ashikhmin–Shirley's) and colours
+the BRDF is not linear in (a Schlick F₀) are refused with the list of what can be mapped: glTF's material (`type =
+"gltf"`) maps roughness, metalness and the rest. The area-light methods that integrate constant parameters (`ltc`,
+`analytic`, `biased`) leave a material with mapped colours or lobes to `forward` in `auto` (asked for by name, they
+integrate the factors and say so); a normal map, emission or occlusion alone keeps them. Measured against the
+reference: docs/assets.md, *Texture maps on library materials*.
 
 | type | reciprocal | energy conserving | texture maps |
 |---|---|---|---|
@@ -89,9 +100,9 @@ PROPERTIES = {
 
 #: what may be a texture, where the model does not say it itself (``Mapped.mappable``)
 MAPS = {
-    "microfacet": "`diffuse`, `specular` (not a Schlick F₀)",
+    "microfacet": "`diffuse`, `specular` (not a Schlick F₀), `alpha`",
     "gltf": "every factor (its `*_texture` slots)",
-    "scratched": "a glTF base's textures (a base with mapped colours is refused)",
+    "scratched": "a glTF base's textures (a library base with maps or emission is refused)",
     "translucent": "`albedo_texture`: the light leaving the medium × its texel",
 }
 
@@ -102,7 +113,7 @@ def maps(name: str) -> str:
     cls = MATERIALS[name]
     if name in MAPS:
         return MAPS[name]
-    mappable = cls.mappable() if issubclass(cls, Mapped) else ()
+    mappable = (*cls.mappable(), *cls.lobe_maps) if issubclass(cls, Mapped) else ()
     return ", ".join(f"`{field}`" for field in mappable) or "none"
 
 

@@ -76,7 +76,7 @@ from pydantic import Field, field_validator, model_validator
 from ..cache import Cache, source_hash
 from ..quantities import NonNeg
 from ..textures import TextureRef, load_texture, lookup
-from .base import RGB, Material, Unit, register_material
+from .base import RGB, Material, Unit, perturbed_frame, register_material
 from .microfacet import Distribution, _normalize, smith_lambda_ggx
 
 #: the smallest α = roughness² rendered (a glTF roughness of 0 is a mirror; below this GGX is a delta in float32)
@@ -633,7 +633,7 @@ class Gltf(Material):
         texels = self._lookup("base_color_texture", uv)
         return alpha if texels is None else alpha * texels[:, 3]
 
-    def emission(self, uv: np.ndarray) -> np.ndarray:
+    def emitted(self, uv: np.ndarray) -> np.ndarray:
         """Emitted radiance (N, 3) at mesh uv (unlit: the base colour)."""
         if self.unlit:
             texels = self._lookup("base_color_texture", uv)
@@ -700,21 +700,6 @@ class Gltf(Material):
             if data is not None:
                 out[sampler] = texture_for(ctx, data, normal_map=field.endswith("normal_texture"))
         return out
-
-
-def perturbed_frame(frame: np.ndarray, local_normal: np.ndarray) -> np.ndarray:
-    """A frame whose normal is ``local_normal`` (N, 3) expressed in ``frame`` (a tangent-space normal map), with
-    the tangent re-orthogonalised against it and the bitangent's handedness kept (GLSL ``shading_frame``)."""
-    t, b, n = frame[..., 0], frame[..., 1], frame[..., 2]
-    new_n = _normalize(local_normal[:, :1] * t + local_normal[:, 1:2] * b + local_normal[:, 2:3] * n)
-    new_t = t - new_n * np.sum(new_n * t, axis=-1, keepdims=True)
-    length = np.linalg.norm(new_t, axis=-1, keepdims=True)
-    from .base import orthonormal_basis
-
-    fallback, _ = orthonormal_basis(new_n)
-    new_t = np.where(length > 1e-6, new_t / np.maximum(length, 1e-300), fallback)
-    sign = np.where(np.sum(np.cross(n, t) * b, axis=-1, keepdims=True) < 0, -1.0, 1.0)
-    return np.stack([new_t, sign * np.cross(new_n, new_t), new_n], axis=-1)
 
 
 def charlie_d(cos_h: np.ndarray, alpha: np.ndarray) -> np.ndarray:

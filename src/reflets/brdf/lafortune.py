@@ -152,7 +152,7 @@ class Lafortune(Mapped):
             p = p + prob[..., index + 1] * (lobe.exponent + 1.0) / (2.0 * np.pi) * cosine_power(cos_a, lobe.exponent)
         return p
 
-    def uniforms(self) -> dict[str, object]:
+    def brdf_uniforms(self) -> dict[str, object]:
         pad = MAX_LOBES - len(self.lobes)
         return {
             "m_kd": tuple(self.kd),

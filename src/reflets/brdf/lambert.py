@@ -36,5 +36,5 @@ class Lambert(Mapped):
         f = np.broadcast_to(np.asarray(self.albedo) / np.pi, np.shape(wo)[:-1] + (3,))
         return np.where(upper(wo, wi), f, 0.0)
 
-    def uniforms(self) -> dict[str, object]:
+    def brdf_uniforms(self) -> dict[str, object]:
         return {"m_albedo": tuple(self.albedo)}

@@ -1,13 +1,16 @@
-"""Texture maps on the BRDF library's colours: ``albedo = { texture = "wood.png" }`` for Lambert, ``kd`` / ``ks`` for
-Phong, Blinn-Phong and Ward, ``diffuse`` / ``specular`` for the microfacet model, ``kd`` for Lafortune's.
-
-A mapped colour is its factor × the texture's RGB at the point, like glTF's factors and textures:
+"""Texture maps on the BRDF library's materials: colours read from textures (``albedo = { texture = "wood.png" }``
+for Lambert, ``kd`` / ``ks`` for Phong, Blinn-Phong and Ward, ``diffuse`` / ``specular`` for the microfacet model,
+``kd`` for Lafortune's), and on every one of them a normal map, emission and ambient occlusion, as glTF's material
+has them:
 
     albedo = { texture = "wood.png", factor = [0.9, 0.9, 0.9], uv = 0, srgb = true, transform = { scale = [4, 4] } }
+    normal_map = { texture = "wood_normal.png", scale = 1.0 }
+    emission = { texture = "lamps.png", factor = [5, 5, 5] }
+    occlusion = { texture = "wood_ao.png", strength = 1.0 }
 
-(``factor`` defaults to 1: the texture as it is; the other keys are :class:`~reflets.textures.TextureRef`'s). The
-material keeps the factor in the field and the texture in ``maps`` (what a saved scene writes back: ``maps = {
-albedo = { texture = … } }`` is read too).
+A mapped colour is its factor × the texture's RGB at the point (``factor`` defaults to 1: the texture as it is; the
+other keys are :class:`~reflets.textures.TextureRef`'s). The material keeps the factor in the field and the texture
+in ``maps`` (what a saved scene writes back: ``maps = { albedo = { texture = … } }`` is read too).
 
 Which colours can be maps: those the BRDF is linear in, per channel — the Lambertian albedo (``lambertian_field``)
 and the colour scaling the rest (``linear_specular``). Every renderer then stays exact with the map: the GLSL twin
@@ -17,33 +20,82 @@ the material's albedos by the texels (``material_ibl_scale``: exact for a linear
 linear in (a Schlick F₀, Ashikhmin–Shirley's ``rs``) and lobe shapes (exponents, roughness) are refused with the
 list of what can be mapped: glTF's material (``type = "gltf"``) maps roughness and metalness.
 
-In the default method ``auto``, area lights reach a mapped material through ``forward`` (``tabulated`` is False:
-``brdf_eval`` per fragment); ``ltc``, ``analytic`` and ``biased`` asked for by name integrate the factors and warn
-that they ignore the textures. A scratched material's base takes no maps (``scratches.material``).
+The surface maps, on every library material (glTF's conventions, so that an asset's maps mean the same here):
+
+- ``normal_map``: a tangent-space normal map (RGB = (n + 1) / 2, +y along the mesh's bitangent), its x and y scaled
+  by ``scale``; it turns the shading frame in both renderers (``shading_frame``; GLSL ``normal_mapped_frame``), so
+  every light and method sees the mapped normal. The GPU reads mips of unit normals (``textures.texture_for``);
+  unlike glTF's material, a library lobe is not widened by the normals' spread under a pixel (Toksvig), which the
+  reference's supersampled pixel shows: a far, bumpy surface looks a little shinier on the GPU;
+- ``emission``: emitted radiance (W m⁻² sr⁻¹ per channel), × a map's RGB (sRGB colour) when it is a texture;
+- ``occlusion``: ambient occlusion (the map's R, linear), ``1 + strength (R − 1)``: it darkens the environment's
+  light only, as glTF's does; the references trace occlusion themselves and ignore the map.
+
+In the default method ``auto``, area lights reach a material with mapped colours through ``forward`` (``tabulated``
+is False: ``brdf_eval`` per fragment); ``ltc``, ``analytic`` and ``biased`` asked for by name integrate the factors
+and warn that they ignore the textures. The surface maps leave the material tabulated: the area-light methods read
+the fragment's mapped frame and add its emission. A scratched material's base takes no maps (``scratches.material``).
 """
 
 from __future__ import annotations
 
 import hashlib
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 from pydantic import Field, model_validator
 
-from ..textures import TextureRef, load_texture, lookup
-from .base import Material, PointsBRDF
+from ..textures import FiniteFloat, TextureRef, load_texture, lookup
+from .base import RGB, Material, PointsBRDF, perturbed_frame
+
+#: the fields that are a texture of their own (not a colour × a map)
+SURFACE_MAPS = ("normal_map", "occlusion")
+#: texel values at which the split sum's albedo curves of a mapped lobe shape are computed (interpolated between)
+LOBE_NODES = 8
+
+
+@dataclass(frozen=True)
+class LobeMap:
+    """How a lobe-shape field reads its map: the value it is clamped to from below (``low``), which end of the
+    texture's range makes the widest lobe (``widest``: "max" for a roughness, "min" for an exponent; the reference
+    samples every point's lobe by that one), and whether the model's NumPy eval takes per-point values as a column
+    (N, 1) rather than (N,)."""
+
+    low: float
+    widest: str
+    column: bool = False
+
+
+class NormalMap(TextureRef):
+    """A tangent-space normal map (glTF's: RGB = (n + 1) / 2, linear) and the scale of its x and y."""
+
+    scale: FiniteFloat = 1.0
+
+
+class OcclusionMap(TextureRef):
+    """Ambient occlusion in the map's R (linear): the environment's light × 1 + strength (R − 1)."""
+
+    strength: float = Field(1.0, ge=0.0, le=1.0, allow_inf_nan=False)
 
 
 class Mapped(Material):
-    """A material of the BRDF library whose colours may be texture maps (module docstring)."""
+    """A material of the BRDF library whose colours may be texture maps, with a normal map, emission and ambient
+    occlusion (module docstring)."""
 
     maps: dict[str, TextureRef] | None = Field(None, description="colour parameters read from textures (× the field)")
+    normal_map: NormalMap | None = Field(None, description="a tangent-space normal map turning the shading frame")
+    emission: RGB | None = Field(None, description="emitted radiance, W/m²/sr per channel (× a map's texels)")
+    occlusion: OcclusionMap | None = Field(None, description="ambient occlusion of the environment's light (R)")
     #: the colour scaling everything but the Lambertian part, linearly per channel (None: none, or not linearly)
     linear_specular: ClassVar[str | None] = None
+    #: the lobe-shape fields a map may scale (a roughness, an exponent): factor × the texel's R
+    lobe_maps: ClassVar[dict[str, LobeMap]] = {}
 
     @classmethod
     def mappable(cls, data: dict | None = None) -> tuple[str, ...]:
-        """The fields a texture may scale (with these field values: a model's Fresnel may decide)."""
+        """The BRDF's colours a texture may scale (with these field values: a model's Fresnel may decide); the
+        emission may be mapped too."""
         return tuple(f for f in (cls.lambertian_field, cls.linear_specular) if f is not None)
 
     @model_validator(mode="before")
@@ -56,84 +108,188 @@ class Mapped(Material):
         for key, value in list(data.items()):
             if isinstance(value, TextureRef):
                 value = value.model_dump()
-            if not (isinstance(value, dict) and "texture" in value) or key == "maps":
+            if not (isinstance(value, dict) and "texture" in value) or key in ("maps", *SURFACE_MAPS):
                 continue
             value = dict(value)
             factor = value.pop("factor", None)
             maps[key] = value
             if factor is not None:
                 data[key] = factor
+            elif key in cls.lobe_maps:
+                data[key] = 1.0
             elif key in cls.model_fields:
                 data[key] = (1.0, 1.0, 1.0)
         if maps:
-            allowed = cls.mappable(data)
+            allowed = (*cls.mappable(data), *cls.lobe_maps, "emission")
             for key in maps:
                 if key not in allowed:
                     name = cls.model_fields["type"].default
                     raise ValueError(
                         f"{key} cannot be a texture in a {name} material; textures are accepted for: "
-                        f"{', '.join(allowed) or 'none'} (the colours the BRDF is linear in; type = \"gltf\" maps "
-                        "roughness and metalness)"
+                        f"{', '.join(allowed)} (the colours the BRDF is linear in, the lobe shapes its twin reads "
+                        'directly; normal_map and occlusion too; type = "gltf" maps roughness and metalness)'
                     )
             data["maps"] = maps
+        if "emission" in maps and data.get("emission") is None:
+            data["emission"] = (1.0, 1.0, 1.0)
         return data
+
+    def constant_dump(self) -> dict:
+        # no integral reads them (and the keys of fits made before they existed stay the same)
+        return {k: v for k, v in super().constant_dump().items() if k not in ("emission", *SURFACE_MAPS)}
 
     # ------------------------------------------------------------------ what varies over the surface
 
     @property
+    def brdf_maps(self) -> tuple[str, ...]:
+        """The mapped fields the BRDF reads (not the emission)."""
+        return tuple(field for field in self.maps or {} if field != "emission")
+
+    @property
+    def surface_textures(self) -> tuple[str, ...]:
+        """Every texture-read field: the mapped colours, the emission, the normal and occlusion maps."""
+        return (*(self.maps or {}), *(f for f in SURFACE_MAPS if getattr(self, f) is not None))
+
+    @property
     def textured(self) -> bool:
-        return bool(self.maps)
+        return bool(self.brdf_maps)
 
     def at(self, uv: np.ndarray, frames=None):
-        """The material at mesh uv: its BRDF with per-point colours (factor × texel), sampled as the factors are
-        (the lobes' shapes do not vary, so the factors' densities cover every point's BRDF)."""
-        if not self.maps:
+        """The material at mesh uv: its BRDF with per-point colours and lobe shapes (factor × texel), sampled as
+        the factors are with each mapped lobe at its widest (``widest_lobe``: a density wherever a point's BRDF is
+        not zero)."""
+        if not self.brdf_maps:
             return self
-        colours = {field: np.asarray(getattr(self, field), np.float64) * self.texels(field, uv) for field in self.maps}
-        return PointsBRDF(self.model_construct(**{**dict(self), **colours}).eval, self)
+        values = {}
+        for field in self.brdf_maps:
+            if field in self.lobe_maps:
+                values[field] = self.lobe_values(field, self.texels(field, uv)[:, 0])
+            else:
+                values[field] = np.asarray(getattr(self, field), np.float64) * self.texels(field, uv)
+        return PointsBRDF(self.model_construct(**{**dict(self), **values}).eval, self.widest_lobe())
+
+    def lobe_values(self, field: str, texels):
+        """A lobe-shape field at texel values (R): factor × texel, at least the field's ``low`` (a pair of
+        factors — an anisotropic roughness — scaled alike)."""
+        spec, factor = self.lobe_maps[field], getattr(self, field)
+        if isinstance(factor, tuple | list):
+            return tuple(np.maximum(f * np.asarray(texels, np.float64), spec.low) for f in factor)
+        value = np.maximum(factor * np.asarray(texels, np.float64), spec.low)
+        return value[:, None] if spec.column and np.ndim(value) == 1 else value
+
+    @property
+    def mapped_lobes(self) -> list[str]:
+        """The lobe-shape fields read from maps."""
+        return [field for field in self.lobe_maps if field in (self.maps or {})]
+
+    def _at_texel(self, texel_of) -> Mapped:
+        """The material with each mapped lobe shape at one texel value (``texel_of(field)``)."""
+        update = {}
+        for field in self.mapped_lobes:
+            value = self.lobe_values(field, np.array([texel_of(field)]))
+            update[field] = tuple(float(v[0]) for v in value) if isinstance(value, tuple) else float(np.ravel(value)[0])
+        return self.model_copy(update=update)
+
+    def widest_lobe(self) -> Mapped:
+        """The material with each mapped lobe shape at the texture's value that widens it most."""
+
+        def extreme(field: str) -> float:
+            red = self.texture_data(field).texels[..., 0]
+            return float(red.max() if self.lobe_maps[field].widest == "max" else red.min())
+
+        return self._at_texel(extreme) if self.mapped_lobes else self
+
+    def lobe_nodes(self) -> list[Mapped] | None:
+        """The material at ``LOBE_NODES`` texel values from 0 to 1 of its mapped lobe shape (what the prefiltered
+        environment's albedo curves are computed at), or None when no lobe shape is mapped."""
+        if not self.mapped_lobes:
+            return None
+        return [self._at_texel(lambda _, t=t: t) for t in np.linspace(0.0, 1.0, LOBE_NODES)]
+
+    def shading_frame(self, frame: np.ndarray, uv: np.ndarray) -> np.ndarray:
+        """The frames turned by the normal map (GLSL ``normal_mapped_frame``)."""
+        if self.normal_map is None:
+            return frame
+        local = lookup(self.normal_map, self.texture_data("normal_map"), uv, "normal_map")[:, :3] * 2.0 - 1.0
+        local[:, :2] *= self.normal_map.scale
+        return perturbed_frame(frame, local)
+
+    def emitted(self, uv: np.ndarray) -> np.ndarray:
+        if self.emission is None:
+            return np.zeros((len(uv), 3))
+        out = np.broadcast_to(np.asarray(self.emission, np.float64), (len(uv), 3))
+        return out * self.texels("emission", uv) if "emission" in (self.maps or {}) else out.copy()
 
     def texels(self, field: str, uv: np.ndarray) -> np.ndarray:
         """(N, 3) texels of a mapped field at mesh uv (as :meth:`at`)."""
         return lookup(self.maps[field], self.texture_data(field), uv, field)[:, :3]
 
     def texture_data(self, field: str):
-        """The decoded texture of a mapped field (colour: sRGB unless its ``srgb`` says otherwise)."""
+        """The decoded texture of a mapped field (colour: sRGB unless its ``srgb`` says otherwise) or of a surface
+        map (``normal_map``, ``occlusion``: linear data)."""
+        if field in SURFACE_MAPS:
+            return load_texture(getattr(self, field), False)
         return load_texture(self.maps[field], True)
 
     # ------------------------------------------------------------------ the GLSL twin
 
     @property
     def brdf_source(self) -> str:
-        """The model's GLSL with each mapped colour read from its texture in ``material_surface``: the uniform
-        stays the factor, the name the BRDF reads becomes a per-fragment global (``#define``)."""
-        if not self.maps:
+        """The model's GLSL with each mapped colour read from its texture in ``material_surface`` (the uniform
+        stays the factor, the name the BRDF reads becomes a per-fragment global: ``#define``), and the surface maps'
+        hooks (``material_emission``, ``material_occlusion``, the normal map turning the frame)."""
+        if not self.surface_textures and self.emission is None:
             return self.glsl
         from ..gpu.programs import read_source, register_source
 
-        lines, surface = [], []
+        def texel(sampler: str, ref: TextureRef) -> str:
+            return f"texture({sampler}, ({sampler}_uv * vec3({'uvs.zw' if ref.uv else 'uvs.xy'}, 1.0)).xy)"
+
+        lines, surface, maps = [], [], self.maps or {}
         for line in read_source(self.glsl).splitlines():
             lines.append(line)
             words = line.split(";")[0].split()
-            if len(words) == 3 and words[0] == "uniform" and words[2][2:] in self.maps:
+            if len(words) == 3 and words[0] == "uniform" and words[2][2:] in maps:
                 kind, name, field = words[1], words[2], words[2][2:]
-                m = self.maps[field].uv_matrix().T.ravel()  # column-major: mesh uv (v up) → image uv
+                lobe = self.lobe_maps.get(field)
                 lines += [
                     f"{kind} map_factor_{field}() {{ return {name}; }}",
-                    f"vec3 t_map_{field};  // the texel",
+                    f"{'float' if lobe else 'vec3'} t_map_{field};  // the texel{chr(39) + 's R' if lobe else ''}",
                     f"{kind} g_map_{field};  // factor × texel: what the BRDF reads as {name}",
                     f"uniform sampler2D m_map_{field};",
-                    f"const mat3 MAP_UV_{field} = mat3({', '.join(repr(float(v)) for v in m)});",
+                    f"uniform mat3 m_map_{field}_uv;  // mesh uv (v up) → image uv",
                     f"#define {name} g_map_{field}",
                 ]
-                uvs = "uvs.zw" if self.maps[field].uv else "uvs.xy"
-                surface += [f"    t_map_{field} = texture(m_map_{field}, (MAP_UV_{field} * vec3({uvs}, 1.0)).xy).rgb;",
-                            f"    g_map_{field} = map_factor_{field}() * t_map_{field};"]  # fmt: skip
-        missing = [field for field in self.maps if f"#define m_{field} g_map_{field}" not in lines]
+                surface.append(f"    t_map_{field} = {texel(f'm_map_{field}', maps[field])}.{'r' if lobe else 'rgb'};")
+                surface.append(f"    g_map_{field} = max(map_factor_{field}() * t_map_{field}, {kind}({lobe.low!r}));"
+                               if lobe else f"    g_map_{field} = map_factor_{field}() * t_map_{field};")  # fmt: skip
+        missing = [field for field in self.brdf_maps if f"#define m_{field} g_map_{field}" not in lines]
         if missing:
             raise RuntimeError(f"{self.glsl} declares no uniform m_{missing[0]} to map")
+        if self.emission is not None:
+            lines += ["uniform vec3 m_emission;", "vec3 g_emission = vec3(0.0);", "#define MATERIAL_EMISSION 1",
+                      "vec3 material_emission() { return g_emission; }"]  # fmt: skip
+            if "emission" in maps:
+                lines += ["uniform sampler2D m_map_emission;", "uniform mat3 m_map_emission_uv;"]
+                surface.append(f"    g_emission = m_emission * {texel('m_map_emission', maps['emission'])}.rgb;")
+            else:
+                surface.append("    g_emission = m_emission;")
+        if self.occlusion is not None:
+            lines += ["uniform sampler2D m_occlusion;", "uniform mat3 m_occlusion_uv;",
+                      "uniform float m_occlusion_strength;", "float g_occlusion = 1.0;", "#define MATERIAL_OCCLUSION 1",
+                      "float material_occlusion() { return g_occlusion; }"]  # fmt: skip
+            red = f"{texel('m_occlusion', self.occlusion)}.r"
+            surface.append(f"    g_occlusion = 1.0 + m_occlusion_strength * ({red} - 1.0);")
+        if self.normal_map is not None:
+            lines += ["uniform sampler2D m_normal_map;", "uniform mat3 m_normal_map_uv;",
+                      "uniform float m_normal_scale;"]  # fmt: skip
+            surface += [f"    vec3 local = {texel('m_normal_map', self.normal_map)}.xyz * 2.0 - 1.0;",
+                        "    local.xy *= m_normal_scale;",
+                        "    frame = normal_mapped_frame(frame, local);"]  # fmt: skip
         scale = [f"    {albedo} *= t_map_{field};"
                  for albedo, field in (("diffuse_albedo", self.lambertian_field), ("albedo", self.linear_specular))
-                 if field in self.maps]  # fmt: skip
+                 if field in maps]  # fmt: skip
+        lines += self._lobe_ibl(scale)
         text = "\n".join([
             *lines,
             "#define MATERIAL_SURFACE 1",
@@ -150,8 +306,61 @@ class Mapped(Material):
         digest = hashlib.sha256(text.encode()).hexdigest()[:16]
         return register_source(f"{self.glsl}#maps-{digest}", text)
 
+    def _lobe_ibl(self, scale: list[str]) -> list[str]:
+        """A mapped lobe shape's split sum (lights.glsl's MATERIAL_IBL): the albedo curves and equivalent roughness
+        at ``LOBE_NODES`` texel values (``lobe_nodes``; ibl.py sets them) interpolated at the fragment's texel, the
+        mapped colours' texels on them as ``material_ibl_scale`` puts them; the diffuse albedo is the model's own."""
+        if not self.mapped_lobes:
+            return []
+        diffuse = f"m_{self.lambertian_field}" if self.lambertian_field else "vec3(0.0)"
+        return [
+            "#if defined(ENV_IBL) && ENV_IBL",
+            "#define MATERIAL_IBL 1",
+            f"const int MAP_IBL_NODES = {LOBE_NODES};",
+            "uniform vec3 u_map_ibl_albedo[IBL_NODES * MAP_IBL_NODES];  // node j's curve at [j * IBL_NODES + k]",
+            "uniform float u_map_ibl_alpha[MAP_IBL_NODES];",
+            "void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 albedo, out float alpha) {",
+            f"    float s = clamp(t_map_{self.mapped_lobes[0]}, 0.0, 1.0) * float(MAP_IBL_NODES - 1);",
+            "    int j = min(int(s), MAP_IBL_NODES - 2);",
+            "    float node = clamp(mu, 0.0, 1.0) * float(IBL_NODES) - 0.5;",
+            "    int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);",
+            "    float fk = clamp(node - float(k0), 0.0, 1.0);",
+            "    int n0 = j * IBL_NODES, n1 = n0 + IBL_NODES;",
+            "    vec3 a0 = mix(u_map_ibl_albedo[n0 + k0], u_map_ibl_albedo[n0 + k1], fk);",
+            "    vec3 a1 = mix(u_map_ibl_albedo[n1 + k0], u_map_ibl_albedo[n1 + k1], fk);",
+            "    albedo = mix(a0, a1, s - float(j));",
+            "    alpha = mix(u_map_ibl_alpha[j], u_map_ibl_alpha[j + 1], s - float(j));",
+            f"    diffuse_albedo = {diffuse};",
+            *[line for line in scale if "diffuse_albedo" not in line],
+            "}",
+            "#endif",
+        ]  # fmt: skip
+
+    def brdf_uniforms(self) -> dict[str, object]:
+        """The model's own uniforms (each model defines them)."""
+        return {}
+
+    def uniforms(self) -> dict[str, object]:
+        """The model's uniforms, and the surface maps': factors, uv transforms (mat3, column-major)."""
+        values = self.brdf_uniforms()
+        refs = {f"m_map_{field}": ref for field, ref in (self.maps or {}).items()}
+        refs.update({f"m_{field}": getattr(self, field) for field in SURFACE_MAPS if getattr(self, field) is not None})
+        for sampler, ref in refs.items():
+            values[sampler + "_uv"] = ref.uv_matrix().T.astype(np.float32).tobytes()
+        if self.emission is not None:
+            values["m_emission"] = tuple(float(c) for c in self.emission)
+        if self.normal_map is not None:
+            values["m_normal_scale"] = float(self.normal_map.scale)
+        if self.occlusion is not None:
+            values["m_occlusion_strength"] = float(self.occlusion.strength)
+        return values
+
     def textures(self, ctx) -> dict[str, object]:
         from ..textures import texture_for
 
-        return {f"m_map_{field}": texture_for(ctx, self.texture_data(field)) for field in self.maps or {}}
-
+        out = {f"m_map_{field}": texture_for(ctx, self.texture_data(field)) for field in self.maps or {}}
+        if self.occlusion is not None:
+            out["m_occlusion"] = texture_for(ctx, self.texture_data("occlusion"))
+        if self.normal_map is not None:
+            out["m_normal_map"] = texture_for(ctx, self.texture_data("normal_map"), normal_map=True)
+        return out

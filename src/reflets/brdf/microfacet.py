@@ -34,7 +34,7 @@ from .base import (
     sample_mixture,
     upper,
 )
-from .maps import Mapped
+from .maps import LobeMap, Mapped
 
 _SQRT_PI = np.sqrt(np.pi)
 
@@ -241,6 +241,7 @@ class Microfacet(Oriented, Mapped):
     diffuse: Reflectance = (0.0, 0.0, 0.0)
     lambertian_field: ClassVar[str] = "diffuse"
     linear_specular: ClassVar[str] = "specular"
+    lobe_maps: ClassVar[dict[str, LobeMap]] = {"alpha": LobeMap(low=1e-3, widest="max")}
 
     @classmethod
     def mappable(cls, data: dict | None = None) -> tuple[str, ...]:
@@ -270,9 +271,8 @@ class Microfacet(Oriented, Mapped):
     @property
     def alpha_xy(self) -> tuple[float, float]:
         """(alpha_x, alpha_y) = (Mitsuba's alpha_u, alpha_v)."""
-        if isinstance(self.alpha, tuple):
-            return float(self.alpha[0]), float(self.alpha[1])
-        return float(self.alpha), float(self.alpha)
+        pair = self.alpha if isinstance(self.alpha, tuple) else (self.alpha, self.alpha)
+        return tuple(a if isinstance(a, np.ndarray) else float(a) for a in pair)  # arrays: per point (maps.Mapped.at)
 
     @property
     def ndf(self) -> Distribution:
@@ -378,7 +378,7 @@ class Microfacet(Oriented, Mapped):
             "BRDF_MF_CORRELATED": int(self.masking == "correlated"),
         }
 
-    def uniforms(self) -> dict[str, object]:
+    def brdf_uniforms(self) -> dict[str, object]:
         return {
             "m_alpha": self.alpha_xy,
             "m_specular": tuple(float(s) for s in self.specular),

@@ -54,6 +54,8 @@ class Mirror(Mapped):
         total = np.add(self.diffuse, self.reflectance)
         if self.fresnel == "none" and np.any(total > 1.0 + 1e-9):
             raise ValueError(f"diffuse + reflectance exceeds 1 ({self.diffuse} + {self.reflectance})")
+        if self.normal_map is not None:  # fermat and the reference's bounce reflect about the geometric normal
+            raise ValueError("a mirror takes no normal_map: its reflections are traced from the mesh's own normals")
         return self
 
     @property
@@ -80,7 +82,7 @@ class Mirror(Mapped):
         reflections of the other meshes); a plain mesh: its BRDF."""
         return dict.fromkeys(LIGHT_TYPES, "fermat") if getattr(mesh, "reflector", False) else {}
 
-    def uniforms(self) -> dict[str, object]:
+    def brdf_uniforms(self) -> dict[str, object]:
         return {
             "m_diffuse": tuple(self.diffuse),
             "m_reflectance": tuple(self.reflectance),

@@ -19,7 +19,7 @@ from .base import (
     sample_power_cosine,
     upper,
 )
-from .maps import Mapped
+from .maps import LobeMap, Mapped
 
 
 def mirror(wo: np.ndarray) -> np.ndarray:
@@ -71,6 +71,7 @@ class Phong(Mapped):
     lambertian_field: ClassVar[str] = "kd"
     specular_field: ClassVar[str] = "ks"
     linear_specular: ClassVar[str] = "ks"
+    lobe_maps: ClassVar[dict[str, LobeMap]] = {"exponent": LobeMap(low=0.0, widest="min", column=True)}
 
     def lobe_summary(self):
         return tuple(float(c) for c in self.kd), 1, float(self.exponent)
@@ -116,7 +117,7 @@ class Phong(Mapped):
         lobe = pdf_lobe(mirror(wo), self.exponent, wi)
         return mix_pdf(self._weights(), [pdf_cosine(wi), lobe])
 
-    def uniforms(self) -> dict[str, object]:
+    def brdf_uniforms(self) -> dict[str, object]:
         return {
             "m_kd": tuple(self.kd),
             "m_ks": tuple(self.ks),

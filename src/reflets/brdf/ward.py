@@ -117,7 +117,7 @@ class Ward(HalfVectorLobeMixture, Oriented, Mapped):
         value = np.exp(-slope_exponent(h, ax, ay)) / (np.pi * ax * ay * np.where(ok, hz, 1.0) ** 3)
         return np.where(ok, value, 0.0)
 
-    def uniforms(self) -> dict[str, object]:
+    def brdf_uniforms(self) -> dict[str, object]:
         ax, ay = self.alpha_xy
         return {
             "m_kd": tuple(self.kd),

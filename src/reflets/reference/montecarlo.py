@@ -364,7 +364,7 @@ class MonteCarloReference:
             material = self.materials[m_index]
             geometric = surf.frame[s]
             surf.frame[s] = material.shading_frame(geometric, uv[s])
-            emitted[s] += material.emission(uv[s])
+            emitted[s] += material.emitted(uv[s])
             bound[m_index] = (s, material.at(uv[s], (geometric, surf.frame[s])))
         return bound
 

@@ -202,9 +202,12 @@ class Scratched(Oriented, Material):
             raise ValueError('fresnel = "none" takes neither conductor nor ior')
         if self.base.cutout:  # the scratches pass neither cuts nor blends
             raise ValueError(f'a glTF base must be opaque (alpha_mode "{self.base.alpha_mode}" is not taken here)')
-        if getattr(self.base, "maps", None):  # the environment's split sum takes the base's constant albedos
-            raise ValueError(f"the base's colours cannot be texture maps ({', '.join(self.base.maps)}): a glTF base "
-                             "(type = \"gltf\") takes textures here")  # fmt: skip
+        # the environment's split sum takes the base's constant albedos, the scratches pass no library hooks
+        mapped = [*getattr(self.base, "surface_textures", ()), *(["emission"] if getattr(self.base, "emission", None)
+                                                                  else [])]
+        if mapped:
+            raise ValueError(f"a library base takes no texture maps nor emission ({', '.join(dict.fromkeys(mapped))}): "
+                             'a glTF base (type = "gltf") takes textures here')  # fmt: skip
         if getattr(self.base, "transmissive", False):  # nor draws what lies behind
             raise ValueError("a glTF base must be opaque (a transmission factor is not taken here)")
         return self
@@ -296,8 +299,8 @@ class Scratched(Oriented, Material):
     def shading_frame(self, frame: np.ndarray, uv: np.ndarray) -> np.ndarray:
         return self.base.shading_frame(frame, uv)
 
-    def emission(self, uv: np.ndarray) -> np.ndarray:
-        return self.base.emission(uv)
+    def emitted(self, uv: np.ndarray) -> np.ndarray:
+        return self.base.emitted(uv)
 
     def techniques(self, mesh) -> dict[str, str]:
         """The ``scratches`` pass under every light: the scratch lobes (thickened delta lights, midpoint samples of

@@ -190,8 +190,7 @@ void material_surface(vec4 uvs, inout mat3 frame) {
     float mean_length = clamp(length(local), 1e-3, 1.0);
     g_normal_variance = 2.0 * (1.0 - mean_length) / mean_length * m_normal_scale * m_normal_scale;
     local.xy *= m_normal_scale;
-    float handedness = dot(cross(frame[2], frame[0]), frame[1]) < 0.0 ? -1.0 : 1.0;
-    frame = shading_frame(normalize(frame * local), vec4(frame[0], handedness));
+    frame = normal_mapped_frame(frame, local);
 #endif
 #if BRDF_GLTF_COAT
     g_coat_n = normalize(transpose(frame) * coat_world);

@@ -19,6 +19,13 @@ mat3 shading_frame(vec3 n, vec4 tangent) {
     return mat3(t, b, n);  // columns: local → world; transpose(frame) * w gives local coordinates
 }
 
+// The frame turned by a tangent-space normal map: ``local`` is the mapped normal in ``frame`` (its xy already scaled);
+// the tangent re-orthogonalised against it, the bitangent's handedness kept (brdf/base.py's perturbed_frame).
+mat3 normal_mapped_frame(mat3 frame, vec3 local) {
+    float handedness = dot(cross(frame[2], frame[0]), frame[1]) < 0.0 ? -1.0 : 1.0;
+    return shading_frame(normalize(frame * local), vec4(frame[0], handedness));
+}
+
 // Equirectangular lookup coordinates, Mitsuba 3 envmap convention (row 0 = up, +y is up).
 vec2 equirect_uv(vec3 d) {
     float u = atan(d.x, -d.z) / TWO_PI;
