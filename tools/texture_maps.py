@@ -1,6 +1,7 @@
 """Texture maps against the reference: library materials with mapped colours (a Lambert floor, a Phong ball with a
 diffuse map, a conductor with a specular map) under a point + a quad light and under the studio map; mapped lobe
-shapes (a conductor's roughness, a Phong exponent) under the same lights; normal maps and a mapped emission under a
+shapes (a conductor's roughness, a Phong exponent) under the same lights, and the others (Blinn-Phong, Ward,
+Ashikhmin-Shirley) under the point + quad; normal maps and a mapped emission under a
 point + a quad light; and a striped
 translucent marble under a quad light, the studio map (rough interface) and a point light (against the volumetric
 reference) — each beside the same scene without its maps against its own reference (docs/assets.md). Relative MSE
@@ -23,6 +24,7 @@ from reflets.bench.maps import (
     QUAD,
     lobe_maps_scene,
     mapped_scene,
+    other_lobe_maps_scene,
     striped_marble,
     surface_maps_scene,
     unmapped,
@@ -52,6 +54,9 @@ def main() -> None:
                     ref = reference(scene, spp=32, pixel="box")
                     error = relmse(blocks(reflets.render(scene, spp=16)), blocks(ref))
                     print(f"library {kind}, {name}, {'mapped' if mapped else 'unmapped'}: {error:.2e}")
+        scene = other_lobe_maps_scene(directory, [POINT, QUAD])
+        error = relmse(blocks(reflets.render(scene, spp=16)), blocks(reference(scene, spp=32, pixel="box")))
+        print(f"library lobe shapes (Blinn-Phong, Ward, Ashikhmin-Shirley), point + quad, mapped: {error:.2e}")
         for name, light, roughness, engine in (("quad", MARBLE_QUAD, 0.0, "numpy"), ("studio map", ENV, 0.3, "numpy"),
                                                ("point", MARBLE_POINT, 0.0, "volumetric")):  # fmt: skip
             for mapped in (True, False):

@@ -9,7 +9,15 @@ import pytest
 import reflets
 from reflets.bench import maps
 from reflets.bench.assets import block_means as blocks
-from reflets.bench.maps import POINT, QUAD, lobe_maps_scene, mapped_scene, surface_maps_scene, unmapped
+from reflets.bench.maps import (
+    POINT,
+    QUAD,
+    lobe_maps_scene,
+    mapped_scene,
+    other_lobe_maps_scene,
+    surface_maps_scene,
+    unmapped,
+)
 from reflets.brdf import MATERIALS
 from reflets.brdf.maps import Mapped
 from reflets.errors import SceneError
@@ -72,8 +80,9 @@ def test_a_mapped_material_round_trips_through_its_dump():
 @pytest.mark.parametrize(
     ("material", "says"),
     [
-        ({"type": "blinn_phong", "exponent": {"texture": UV_GRID}}, "materials.m: exponent cannot be a texture"),
-        ({"type": "ward", "alpha": {"texture": UV_GRID}}, "alpha cannot be a texture in a ward material"),
+        ({"type": "lafortune", "lobes": {"texture": UV_GRID}}, "materials.m: lobes cannot be a texture"),
+        ({"type": "ashikhmin_shirley", "nu": {"texture": UV_GRID}, "nv": {"texture": UV_GRID, "uv": 1}},
+         "nu and nv read different textures"),
         ({"type": "mirror", "normal_map": {"texture": UV_GRID}}, "a mirror takes no normal_map"),
         ({"type": "lambert", "normal_map": {"texture": UV_GRID, "scale": float("nan")}}, "normal_map.scale"),
         ({"type": "lambert", "occlusion": {"texture": UV_GRID, "strength": 2}}, "occlusion.strength"),
@@ -218,7 +227,10 @@ def test_surface_maps_round_trip_through_the_dump_and_the_gltf_export(tmp_path):
     [("microfacet", "alpha", {"alpha": {"texture": UV_GRID, "factor": 0.6}, "fresnel": "conductor"}),
      ("microfacet", "alpha", {"alpha": {"texture": UV_GRID, "factor": [0.6, 0.2]}, "diffuse": (0.1, 0.1, 0.1)}),
      ("phong", "exponent", {"exponent": {"texture": UV_GRID, "factor": 80}, "kd": (0.2, 0.2, 0.2),
-                            "normalized": True})],
+                            "normalized": True}),
+     ("blinn_phong", "exponent", {"exponent": {"texture": UV_GRID, "factor": 80}, "normalized": True}),
+     ("ward", "alpha", {"alpha": {"texture": UV_GRID, "factor": [0.4, 0.1]}, "kd": (0.2, 0.2, 0.2)}),
+     ("ashikhmin_shirley", "nu", {"nu": {"texture": UV_GRID, "factor": 300}, "nv": 20})],
 )
 def test_at_evaluates_each_point_with_its_own_lobe(name, field, fields, rng):
     """A mapped roughness or exponent: ``at(uv)`` equals the model at each point's factor × R (at least the field's
@@ -261,3 +273,11 @@ def test_mapped_lobe_shapes_under_lights_and_the_environment_as_the_reference(tm
     studio = [{"type": "environment", "file": str(default_environment())}]
     mapped, plain = error(lobe_maps_scene(tmp_path, studio)), error(lobe_maps_scene(tmp_path, studio, maps=False))
     assert mapped < min(1.3 * plain, 0.03)  # measured 1.47e-2 mapped, 1.35e-2 with the factors
+
+
+def test_the_other_mapped_lobe_shapes_recompute_what_their_twins_derive(tmp_path):
+    """Blinn-Phong's exponent (its normalisation), Ward's α (1/α and 1/(π α_x α_y)) and Ashikhmin-Shirley's
+    exponents (their normalisation), each recomputed per fragment from the mapped value: as the reference."""
+    scene = other_lobe_maps_scene(tmp_path, [POINT, QUAD])
+    ref = reflets.reference(scene, spp=32, pixel="box", progress=False).image
+    assert relmse(blocks(reflets.render(scene, spp=16)), blocks(ref)) < 1e-3  # measured 1.8e-4

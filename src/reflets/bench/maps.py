@@ -102,22 +102,49 @@ def surface_maps_scene(directory: str | Path, lights: list, size=(96, 72), maps:
     })  # fmt: skip
 
 
-def lobe_maps_scene(directory: str | Path, lights: list, size=(96, 72), maps: bool = True) -> Scene:
-    """Lobe shapes read from a map of four grey bands (R 0.25 … 1, written to ``directory``): a GGX conductor's
-    roughness α (factor 0.6) and a Phong ball's exponent (factor 200); ``maps`` False: the factors alone."""
+def _bands(directory: str | Path) -> str:
+    """A map of four grey bands (R 0.25 … 1 along v), written to ``directory``/bands.png."""
     bands = np.repeat(np.array([64, 128, 191, 255], np.uint8), 4)[:, None].repeat(16, axis=1)
     Image.fromarray(np.dstack([bands] * 3)).save(Path(directory) / "bands.png")
-    texture = str(Path(directory) / "bands.png")
+    return str(Path(directory) / "bands.png")
+
+
+def _two_balls(materials: dict, lights: list, size) -> Scene:
+    """Two balls (materials "ball", "metal") on a grey Lambert floor, and a small one in front (material "front")
+    when ``materials`` has it."""
+    front = [{"shape": "sphere", "radius": 0.25, "material": "front", "transform": {"translate": [0, 0.25, 0.9]}}]
+    return load_dict({
+        "camera": {"position": [0, 1.2, 3.2], "look_at": [0, 0.3, 0], "fov_y": 40, "size": list(size)},
+        "materials": {"floor": {"type": "lambert", "albedo": [0.5, 0.5, 0.5]}, **materials},
+        "mesh": [{"shape": "plane", "size": [4, 4], "material": "floor"},
+                 {"shape": "sphere", "radius": 0.5, "material": "ball", "transform": {"translate": [-0.6, 0.5, 0]}},
+                 {"shape": "sphere", "radius": 0.5, "material": "metal", "transform": {"translate": [0.6, 0.5, 0]}},
+                 *(front if "front" in materials else [])],
+        "light": lights,
+    })  # fmt: skip
+
+
+def lobe_maps_scene(directory: str | Path, lights: list, size=(96, 72), maps: bool = True) -> Scene:
+    """Lobe shapes read from a map of four grey bands (R 0.25 … 1): a GGX conductor's roughness α (factor 0.6) and a
+    Phong ball's exponent (factor 200); ``maps`` False: the factors alone."""
+    texture = _bands(directory)
     metal = {"type": "microfacet", "fresnel": "conductor", "alpha": 0.6}
     ball = {"type": "phong", "kd": [0.3, 0.2, 0.1], "ks": [0.5, 0.5, 0.5], "exponent": 200, "normalized": True}
     if maps:
         metal["alpha"] = {"texture": texture, "factor": 0.6}
         ball["exponent"] = {"texture": texture, "factor": 200}
-    return load_dict({
-        "camera": {"position": [0, 1.2, 3.2], "look_at": [0, 0.3, 0], "fov_y": 40, "size": list(size)},
-        "materials": {"floor": {"type": "lambert", "albedo": [0.5, 0.5, 0.5]}, "ball": ball, "metal": metal},
-        "mesh": [{"shape": "plane", "size": [4, 4], "material": "floor"},
-                 {"shape": "sphere", "radius": 0.5, "material": "ball", "transform": {"translate": [-0.6, 0.5, 0]}},
-                 {"shape": "sphere", "radius": 0.5, "material": "metal", "transform": {"translate": [0.6, 0.5, 0]}}],
-        "light": lights,
-    })  # fmt: skip
+    return _two_balls({"ball": ball, "metal": metal}, lights, size)
+
+
+def other_lobe_maps_scene(directory: str | Path, lights: list, size=(96, 72)) -> Scene:
+    """The other lobe shapes a map may give, on the bands: a Blinn-Phong ball's exponent (factor 300; its
+    normalisation per fragment), an anisotropic Ward ball's α (factors [0.5, 0.15]; the twin's 1/α per fragment) and
+    a small Ashikhmin-Shirley ball's exponents (factors 400 and 40, one map; its normalisation per fragment)."""
+    texture = _bands(directory)
+    ball = {"type": "blinn_phong", "kd": [0.2, 0.3, 0.2], "ks": [0.5, 0.5, 0.5], "normalized": True,
+            "exponent": {"texture": texture, "factor": 300}}  # fmt: skip
+    metal = {"type": "ward", "kd": [0.1, 0.1, 0.1], "ks": [0.6, 0.5, 0.3],
+             "alpha": {"texture": texture, "factor": [0.5, 0.15]}}  # fmt: skip
+    front = {"type": "ashikhmin_shirley", "rs": [0.05, 0.05, 0.05], "rd": [0.4, 0.3, 0.2],
+             "nu": {"texture": texture, "factor": 400}, "nv": {"texture": texture, "factor": 40}}  # fmt: skip
+    return _two_balls({"ball": ball, "metal": metal, "front": front}, lights, size)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field
@@ -15,7 +15,7 @@ from .base import (
     register_material,
     upper,
 )
-from .maps import Mapped
+from .maps import LobeMap, Mapped
 
 #: an Ashikhmin–Shirley exponent
 Exponent = Annotated[float, Field(ge=0, le=1e6, allow_inf_nan=False)]
@@ -83,6 +83,11 @@ class AshikhminShirley(HalfVectorLobeMixture, Oriented, Mapped):
     rd: Reflectance = (0.5, 0.5, 0.5)
     nu: Exponent = 100.0
     nv: Exponent = 100.0
+    #: mapped exponents (one map for both: the split sum interpolates one texel) and the normalisation from them
+    lobe_maps: ClassVar[dict[str, LobeMap]] = {
+        name: LobeMap(low=0.0, widest="min", derived=(("m_norm", "sqrt((m_nu + 1.0) * (m_nv + 1.0)) / (8.0 * PI)"),))
+        for name in ("nu", "nv")
+    }
 
     def lobe_summary(self):  # its diffuse term is not Lambertian: none split off
         return (0.0, 0.0, 0.0), 2, float(np.sqrt(self.nu * self.nv))
@@ -91,7 +96,7 @@ class AshikhminShirley(HalfVectorLobeMixture, Oriented, Mapped):
 
     @property
     def norm(self) -> float:
-        return float(np.sqrt((self.nu + 1.0) * (self.nv + 1.0)))
+        return np.sqrt((np.asarray(self.nu) + 1.0) * (np.asarray(self.nv) + 1.0))  # per point when mapped
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         wo = np.asarray(wo, dtype=np.float64)
@@ -140,5 +145,5 @@ class AshikhminShirley(HalfVectorLobeMixture, Oriented, Mapped):
             "m_rd": tuple(self.rd),
             "m_nu": float(self.nu),
             "m_nv": float(self.nv),
-            "m_norm": self.norm / (8.0 * np.pi),
+            "m_norm": float(self.norm / (8.0 * np.pi)),
         }

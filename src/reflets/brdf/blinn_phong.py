@@ -16,7 +16,7 @@ from .base import (
     sample_power_cosine,
     upper,
 )
-from .maps import Mapped
+from .maps import LobeMap, Mapped
 
 _Z = np.array([0.0, 0.0, 1.0])
 
@@ -55,6 +55,10 @@ class BlinnPhong(HalfVectorLobeMixture, Mapped):
     lambertian_field: ClassVar[str] = "kd"
     specular_field: ClassVar[str] = "ks"
     linear_specular: ClassVar[str] = "ks"
+    #: a mapped exponent recomputes the normalisation per fragment (in float32: 1e-6 relative)
+    lobe_maps: ClassVar[dict[str, LobeMap]] = {"exponent": LobeMap(low=0.0, widest="min", column=True, derived=(
+        ("m_norm", "(m_exponent + 2.0) * (m_exponent + 4.0) / (8.0 * PI * (exp2(-0.5 * m_exponent) + m_exponent))"),
+    ))}  # fmt: skip
 
     def lobe_summary(self):
         return tuple(float(c) for c in self.kd), 2, float(self.exponent)

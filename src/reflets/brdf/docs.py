@@ -50,8 +50,9 @@ anisotropically oriented sphere (tests/test_gpu_vs_reference.py).
 
 A colour the BRDF is linear in — the Lambertian albedo and the colour scaling the rest — may be read from an image,
 multiplied by a factor (the field's value; default 1), as glTF's factors and textures are (`reflets.brdf.maps`); so
-may the lobe shapes the GLSL twins read as they are (the microfacet roughness `alpha`, Phong's `exponent`: factor ×
-the texel's R); and every library material takes a normal map, an emission and an ambient occlusion map:
+may the lobe shapes (the microfacet and Ward roughness `alpha`, the Phong and Blinn-Phong `exponent`,
+Ashikhmin–Shirley's `nu` / `nv`: factor × the texel's R); and every library material takes a normal map, an emission
+and an ambient occlusion map:
 
 ```toml
 [materials.wood]
@@ -70,13 +71,12 @@ trilinear and anisotropic mips; reference: bilinear lookups at each hit, average
 prefiltered environment scales the albedos by a colour map's texels — exact for a linear colour — and, for a mapped
 lobe shape, interpolates albedo curves and prefiltered levels computed at eight texel values. A normal map (glTF's
 encoding) turns the shading frame in both renderers; emission adds to every pass; occlusion darkens the
-environment's light only (glTF's rule; the references trace occlusion themselves). Other lobe shapes (Blinn-Phong's
-exponent, whose normalisation is computed in float64 outside the twin; Ward's and Ashikhmin–Shirley's) and colours
-the BRDF is not linear in (a Schlick F₀) are refused with the list of what can be mapped: glTF's material (`type =
-"gltf"`) maps roughness, metalness and the rest. The area-light methods that integrate constant parameters (`ltc`,
-`analytic`, `biased`) leave a material with mapped colours or lobes to `forward` in `auto` (asked for by name, they
-integrate the factors and say so); a normal map, emission or occlusion alone keeps them. Measured against the
-reference: docs/assets.md, *Texture maps on library materials*.
+environment's light only (glTF's rule; the references trace occlusion themselves). Lafortune's lobes and colours
+the BRDF is not linear in (a Schlick F₀, Ashikhmin–Shirley's `rs`) are refused with the list of what can be mapped:
+glTF's material (`type = "gltf"`) maps metalness and the rest. The area-light methods that integrate constant
+parameters (`ltc`, `analytic`, `biased`) leave a material with mapped colours or lobes to `forward` in `auto` (asked
+for by name, they integrate the factors and say so); a normal map, emission or occlusion alone keeps them.
+Measured against the reference: docs/assets.md, *Textures on the library's materials*.
 
 | type | reciprocal | energy conserving | texture maps |
 |---|---|---|---|

@@ -1,24 +1,33 @@
 """Texture maps on the BRDF library's materials: colours read from textures (``albedo = { texture = "wood.png" }``
 for Lambert, ``kd`` / ``ks`` for Phong, Blinn-Phong and Ward, ``diffuse`` / ``specular`` for the microfacet model,
-``kd`` for Lafortune's), and on every one of them a normal map, emission and ambient occlusion, as glTF's material
-has them:
+``kd`` for Lafortune's), lobe shapes (the microfacet and Ward roughness ``alpha``, the Phong and Blinn-Phong
+``exponent``, Ashikhmin–Shirley's ``nu`` / ``nv``), and on every one of them a normal map, emission and ambient
+occlusion, as glTF's material has them:
 
     albedo = { texture = "wood.png", factor = [0.9, 0.9, 0.9], uv = 0, srgb = true, transform = { scale = [4, 4] } }
+    exponent = { texture = "wood_gloss.png", factor = 200 }
     normal_map = { texture = "wood_normal.png", scale = 1.0 }
     emission = { texture = "lamps.png", factor = [5, 5, 5] }
     occlusion = { texture = "wood_ao.png", strength = 1.0 }
 
-A mapped colour is its factor × the texture's RGB at the point (``factor`` defaults to 1: the texture as it is; the
-other keys are :class:`~reflets.textures.TextureRef`'s). The material keeps the factor in the field and the texture
-in ``maps`` (what a saved scene writes back: ``maps = { albedo = { texture = … } }`` is read too).
+A mapped colour is its factor × the texture's RGB at the point, a mapped lobe shape its factor × the texel's R (at
+least the field's lowest value: ``LobeMap``) (``factor`` defaults to 1: the texture as it is; the other keys are
+:class:`~reflets.textures.TextureRef`'s). The material keeps the factor in the field and the texture in ``maps``
+(what a saved scene writes back: ``maps = { albedo = { texture = … } }`` is read too).
 
 Which colours can be maps: those the BRDF is linear in, per channel — the Lambertian albedo (``lambertian_field``)
 and the colour scaling the rest (``linear_specular``). Every renderer then stays exact with the map: the GLSL twin
 reads the texel into the colour before ``brdf_eval`` (``material_surface``, as glTF's material does), the NumPy
 reference evaluates the BRDF with per-point colours (:meth:`Mapped.at`), and the prefiltered environment scales
 the material's albedos by the texels (``material_ibl_scale``: exact for a linear colour). A colour the BRDF is not
-linear in (a Schlick F₀, Ashikhmin–Shirley's ``rs``) and lobe shapes (exponents, roughness) are refused with the
-list of what can be mapped: glTF's material (``type = "gltf"``) maps roughness and metalness.
+linear in (a Schlick F₀, Ashikhmin–Shirley's ``rs``) and Lafortune's lobes are refused with the list of what can be
+mapped.
+
+A mapped lobe shape: the twin recomputes per fragment the uniforms it reads for it (the value itself, or what is
+derived from it in float64 for constant lobes — Ward's 1/α, a normalisation: ``LobeMap.derived``); the reference
+evaluates each hit at its own value and samples by the texture's widest lobe (a density wherever any point's BRDF is
+not zero); the prefiltered environment interpolates albedo curves and equivalent roughness computed at
+``LOBE_NODES`` texel values (several mapped lobe fields must therefore read one texture).
 
 The surface maps, on every library material (glTF's conventions, so that an asset's maps mean the same here):
 
@@ -59,12 +68,17 @@ LOBE_NODES = 8
 class LobeMap:
     """How a lobe-shape field reads its map: the value it is clamped to from below (``low``), which end of the
     texture's range makes the widest lobe (``widest``: "max" for a roughness, "min" for an exponent; the reference
-    samples every point's lobe by that one), and whether the model's NumPy eval takes per-point values as a column
-    (N, 1) rather than (N,)."""
+    samples every point's lobe by that one), whether the model's NumPy eval takes per-point values as a column
+    (N, 1) rather than (N,), and the GLSL twin's uniforms the fragment recomputes: ``uniform`` (None where the twin
+    has no uniform of the field's own) becomes max(factor × t, low), each of ``derived`` (name, expression) its
+    expression — ``{factor}`` the uniform's own value, ``{t}`` the texel's R, and the twin's uniform names standing
+    for the mapped values (assigned first)."""
 
     low: float
     widest: str
     column: bool = False
+    uniform: str | None = ""  # "": m_<field>
+    derived: tuple[tuple[str, str], ...] = ()
 
 
 class NormalMap(TextureRef):
@@ -129,6 +143,10 @@ class Mapped(Material):
                         f"{', '.join(allowed)} (the colours the BRDF is linear in, the lobe shapes its twin reads "
                         'directly; normal_map and occlusion too; type = "gltf" maps roughness and metalness)'
                     )
+            lobes = [key for key in maps if key in cls.lobe_maps]
+            if any(maps[key] != maps[lobes[0]] for key in lobes):  # (the same texture and uv, as dumped)
+                raise ValueError(f"{' and '.join(lobes)} read different textures: mapped lobe shapes must read "
+                                 "the same one (the prefiltered environment interpolates its curves at one texel)")
             data["maps"] = maps
         if "emission" in maps and data.get("emission") is None:
             data["emission"] = (1.0, 1.0, 1.0)
@@ -246,26 +264,27 @@ class Mapped(Material):
             return f"texture({sampler}, ({sampler}_uv * vec3({'uvs.zw' if ref.uv else 'uvs.xy'}, 1.0)).xy)"
 
         lines, surface, maps = [], [], self.maps or {}
+        values = self._fragment_values()  # uniform → (field, GLSL expression of {factor}, {t})
+        order, assigned = list(values), {}
+        for field in self.brdf_maps:
+            red = field in self.lobe_maps
+            lines += [f"{'float' if red else 'vec3'} t_map_{field};  // the texel{chr(39) + 's R' if red else ''}",
+                      f"uniform sampler2D m_map_{field};", f"uniform mat3 m_map_{field}_uv;  // mesh uv → image uv"]
+            surface.append(f"    t_map_{field} = {texel(f'm_map_{field}', maps[field])}.{'r' if red else 'rgb'};")
         for line in read_source(self.glsl).splitlines():
             lines.append(line)
             words = line.split(";")[0].split()
-            if len(words) == 3 and words[0] == "uniform" and words[2][2:] in maps:
-                kind, name, field = words[1], words[2], words[2][2:]
-                lobe = self.lobe_maps.get(field)
-                lines += [
-                    f"{kind} map_factor_{field}() {{ return {name}; }}",
-                    f"{'float' if lobe else 'vec3'} t_map_{field};  // the texel{chr(39) + 's R' if lobe else ''}",
-                    f"{kind} g_map_{field};  // factor × texel: what the BRDF reads as {name}",
-                    f"uniform sampler2D m_map_{field};",
-                    f"uniform mat3 m_map_{field}_uv;  // mesh uv (v up) → image uv",
-                    f"#define {name} g_map_{field}",
-                ]
-                surface.append(f"    t_map_{field} = {texel(f'm_map_{field}', maps[field])}.{'r' if lobe else 'rgb'};")
-                surface.append(f"    g_map_{field} = max(map_factor_{field}() * t_map_{field}, {kind}({lobe.low!r}));"
-                               if lobe else f"    g_map_{field} = map_factor_{field}() * t_map_{field};")  # fmt: skip
-        missing = [field for field in self.brdf_maps if f"#define m_{field} g_map_{field}" not in lines]
-        if missing:
-            raise RuntimeError(f"{self.glsl} declares no uniform m_{missing[0]} to map")
+            if len(words) == 3 and words[0] == "uniform" and words[2] in values:
+                kind, name = words[1], words[2]
+                field, expression = values.pop(name)
+                lines += [f"{kind} map_factor_{name}() {{ return {name}; }}",
+                          f"{kind} g_map_{name};  // what the BRDF reads as {name} at this fragment (maps.{field})",
+                          f"#define {name} g_map_{name}"]  # fmt: skip
+                value = expression.format(factor=f"map_factor_{name}()", t=f"t_map_{field}", kind=kind)
+                assigned[name] = f"    g_map_{name} = {value};"
+        if values:
+            raise RuntimeError(f"{self.glsl} declares no uniform {next(iter(values))} to map")
+        surface += [assigned[name] for name in order]  # the mapped values, then what is derived from them
         if self.emission is not None:
             lines += ["uniform vec3 m_emission;", "vec3 g_emission = vec3(0.0);", "#define MATERIAL_EMISSION 1",
                       "vec3 material_emission() { return g_emission; }"]  # fmt: skip
@@ -305,6 +324,20 @@ class Mapped(Material):
         ])  # fmt: skip
         digest = hashlib.sha256(text.encode()).hexdigest()[:16]
         return register_source(f"{self.glsl}#maps-{digest}", text)
+
+    def _fragment_values(self) -> dict[str, tuple[str, str]]:
+        """The twin's uniforms a mapped field replaces per fragment (uniform → (field, expression)): a colour's
+        factor × texel; a lobe shape's clamped value, then the uniforms derived from it (``LobeMap``)."""
+        values, derived = {}, {}
+        for field in self.brdf_maps:
+            spec = self.lobe_maps.get(field)
+            if spec is None:
+                values[f"m_{field}"] = (field, "{factor} * {t}")
+                continue
+            if spec.uniform is not None:
+                values[spec.uniform or f"m_{field}"] = (field, f"max({{factor}} * {{t}}, {{kind}}({spec.low!r}))")
+            derived.update({name: (field, expression) for name, expression in spec.derived})
+        return {**values, **derived}
 
     def _lobe_ibl(self, scale: list[str]) -> list[str]:
         """A mapped lobe shape's split sum (lights.glsl's MATERIAL_IBL): the albedo curves and equivalent roughness

@@ -16,7 +16,7 @@ from .base import (
     register_material,
     upper,
 )
-from .maps import Mapped
+from .maps import LobeMap, Mapped
 
 #: a Ward roughness (standard deviation of the surface slope)
 Roughness = Annotated[float, Field(ge=1e-3, le=1.0, allow_inf_nan=False)]
@@ -64,6 +64,11 @@ class Ward(HalfVectorLobeMixture, Oriented, Mapped):
     lambertian_field: ClassVar[str] = "kd"
     specular_field: ClassVar[str] = "ks"
     linear_specular: ClassVar[str] = "ks"
+    #: the twin reads 1/α and 1/(π α_x α_y): a mapped α = max(factor × t, 10⁻³) per axis gives both per fragment
+    lobe_maps: ClassVar[dict[str, LobeMap]] = {"alpha": LobeMap(low=1e-3, widest="max", uniform=None, derived=(
+        ("m_inv_alpha", "min({factor} / max({t}, 1e-30), vec2(1000.0))"),
+        ("m_inv_alpha_area", "m_inv_alpha.x * m_inv_alpha.y * INV_PI"),
+    ))}  # fmt: skip
 
     def lobe_summary(self):
         return tuple(float(c) for c in self.kd), 2, blinn_phong_exponent(self.alpha)
@@ -72,9 +77,8 @@ class Ward(HalfVectorLobeMixture, Oriented, Mapped):
 
     @property
     def alpha_xy(self) -> tuple[float, float]:
-        if isinstance(self.alpha, tuple):
-            return float(self.alpha[0]), float(self.alpha[1])
-        return float(self.alpha), float(self.alpha)
+        pair = self.alpha if isinstance(self.alpha, tuple) else (self.alpha, self.alpha)
+        return tuple(a if isinstance(a, np.ndarray) else float(a) for a in pair)  # arrays: per point (maps.Mapped.at)
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         wo = np.asarray(wo, dtype=np.float64)
