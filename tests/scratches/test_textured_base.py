@@ -1,6 +1,6 @@
 """Scratches over a textured base (a glTF material with its textures): the scratches pass reads the base's textures
 as the forward pass does (material_surface), and the reference's finite part reads them too; a base with mapped
-colours is refused (the environment's split sum takes a scratched base's constant albedos)."""
+colours, a normal map and emission takes them too (the pass includes the base's own twin)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,20 @@ from PIL import Image
 import reflets
 from reflets.metrics import relmse
 
+POINT = {"type": "point", "position": [0.3, 1.0, -1.2], "intensity": [2, 2, 2]}
+
+
+def plate(base: dict, coverage: float, light: dict, size):
+    """A plate scratched at ``coverage`` over ``base``, lit by ``light``."""
+    scratched = {"type": "scratched", "preset": "3.14d", "profile": "quartic:0.5", "coverage": coverage,
+                 "base": base, "alpha_size": 64, "table_size": 32, "rays": 2000}  # fmt: skip
+    return reflets.load_dict({
+        "camera": {"position": [0, 1.2, 2.0], "look_at": [0, 0, -0.2], "size": list(size)},
+        "materials": {"s": scratched},
+        "mesh": [{"shape": "plane", "size": [2.4, 2.4], "material": "s"}],
+        "light": [light],
+    })  # fmt: skip
+
 
 def test_scratches_over_a_textured_gltf_base(tmp_path):
     checker = (np.indices((8, 8)).sum(axis=0) % 2 * 200 + 40).astype(np.uint8)
@@ -19,14 +33,7 @@ def test_scratches_over_a_textured_gltf_base(tmp_path):
     base = {**untextured, "base_color_texture": {"texture": str(tmp_path / "checker.png"), "filter": "nearest"}}
 
     def scene(coverage, material=base):
-        scratched = {"type": "scratched", "preset": "3.14d", "profile": "quartic:0.5", "coverage": coverage,
-                     "base": material, "alpha_size": 64, "table_size": 32, "rays": 2000}  # fmt: skip
-        return reflets.load_dict({
-            "camera": {"position": [0, 1.2, 2.0], "look_at": [0, 0, -0.2], "size": [96, 72]},
-            "materials": {"s": scratched},
-            "mesh": [{"shape": "plane", "size": [2.4, 2.4], "material": "s"}],
-            "light": [{"type": "point", "position": [0.3, 1.0, -1.2], "intensity": [2, 2, 2]}],
-        })  # fmt: skip
+        return plate(material, coverage, POINT, (96, 72))
 
     bare = scene(0.0)  # no scratch: the base alone, as forward shades it
     image = reflets.render(bare, method="scratches")
@@ -54,16 +61,31 @@ def test_a_cut_out_or_blended_glTF_base_is_refused_in_one_line():
                                "mesh": [{"shape": "plane", "material": "s"}], "light": [light]})  # fmt: skip
 
 
-@pytest.mark.parametrize(
-    ("maps", "named"),
-    [({"albedo": {"texture": "x.png"}}, "albedo"), ({"normal_map": {"texture": "x.png"}}, "normal_map"),
-     ({"emission": [1, 1, 1]}, "emission"), ({"occlusion": {"texture": "x.png"}}, "occlusion")],
-)
-def test_a_library_base_with_maps_or_emission_is_refused_in_one_line(maps, named, tmp_path):
-    from reflets.errors import SceneError
+@pytest.mark.parametrize("environment", [False, True])
+def test_scratches_over_a_library_base_with_maps(environment, tmp_path):
+    """A library base with a colour map, a normal map and emission, under a point light or the studio map: with no
+    scratch the scratches pass is the forward pass of the base (under the map too: the pass lights the base by the
+    base's own split sum and weights it per pixel — it used the finite part's curve, 21 % dark, and twice the share),
+    and the reference's finite part is the mapped base × its uncovered share."""
+    from reflets.bench.maps import UV_GRID, write_bumps
+    from reflets.scene.assets import default_environment
 
-    says = f"materials.s: a library base takes no texture maps nor emission \\({named}\\)"
-    with pytest.raises(SceneError, match=says):
-        reflets.load_dict({"camera": {"position": [0, 1, 2], "look_at": [0, 0, 0]},
-                           "materials": {"s": {"type": "scratched", "base": {"type": "lambert", **maps}}},
-                           "mesh": [{"shape": "plane", "material": "s"}]}, base_dir=tmp_path)  # fmt: skip
+    bumps = str(write_bumps(tmp_path / "bumps.png"))
+    base = {"type": "phong", "kd": {"texture": str(UV_GRID), "factor": [0.6, 0.6, 0.6]}, "ks": [0.3, 0.3, 0.3],
+            "exponent": 30, "normalized": True, "normal_map": {"texture": bumps}, "emission": [0.05, 0.02, 0.0]}
+    light = {"type": "environment", "file": str(default_environment())} if environment else POINT
+
+    def scene(coverage):
+        return plate(base, coverage, light, (64, 48))
+
+    bare = scene(0.0)
+    alone = bare.model_copy(update={"materials": {"s": bare.materials["s"].base}})
+    image = reflets.render(bare, method="scratches")
+    np.testing.assert_allclose(image, reflets.render(alone, method="forward"), rtol=1e-4, atol=1e-5)
+    if not environment:
+        covered = scene(0.02)
+        weight = covered.materials["s"].base_weight()
+        finite = reflets.reference(covered, spp=4, progress=False).image
+        emitted = reflets.reference(alone.model_copy(update={"light": []}), spp=4, progress=False).image
+        lit = reflets.reference(alone, spp=4, progress=False).image - emitted  # the share weights the BRDF alone
+        np.testing.assert_allclose(finite, weight * lit + emitted, rtol=1e-4, atol=1e-6)

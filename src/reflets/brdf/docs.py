@@ -102,7 +102,7 @@ PROPERTIES = {
 MAPS = {
     "microfacet": "`diffuse`, `specular` (not a Schlick F₀), `alpha`",
     "gltf": "every factor (its `*_texture` slots)",
-    "scratched": "a glTF base's textures (a library base with maps or emission is refused)",
+    "scratched": "its base's textures and maps",
     "translucent": "`albedo_texture`: the light leaving the medium × its texel",
 }
 

@@ -17,7 +17,7 @@ def eval_glsl(material: Material, wo: np.ndarray, wi: np.ndarray, ctx=None) -> n
     shape = wo.shape[:-1]
     count = int(np.prod(shape, dtype=np.int64))
     pad = np.zeros((count, 1), np.float32)
-    program = get_program(ctx, EVAL_PROGRAM, slots={"BRDF": material.glsl}, **material.flags())
+    program = get_program(ctx, EVAL_PROGRAM, slots={"BRDF": material.brdf_source}, **material.flags())
     buffers = [ctx.buffer(np.hstack([w.reshape(count, 3), pad]).tobytes()) for w in (wo, wi)]
     buffers.append(ctx.buffer(reserve=max(count, 1) * 16))
     try:

@@ -43,7 +43,8 @@ The surface maps, on every library material (glTF's conventions, so that an asse
 In the default method ``auto``, area lights reach a material with mapped colours through ``forward`` (``tabulated``
 is False: ``brdf_eval`` per fragment); ``ltc``, ``analytic`` and ``biased`` asked for by name integrate the factors
 and warn that they ignore the textures. The surface maps leave the material tabulated: the area-light methods read
-the fragment's mapped frame and add its emission. A scratched material's base takes no maps (``scratches.material``).
+the fragment's mapped frame and add its emission. A scratched material's base takes maps too (``scratches.material``:
+the twin over the base's).
 """
 
 from __future__ import annotations

@@ -388,7 +388,7 @@ class Fermat(Forward):
             )
             uniforms = {**material.uniforms(), **reflector.uniforms()}
             if self._ibl is not None:  # the environment lights reflected objects as in direct view
-                uniforms.update(self._ibl.uniforms(material))
+                uniforms.update(self._ibl.uniforms(self._lobes.ibl_material(material) if scratched else material))
             textures = material.textures(ctx)
             if scratched:
                 uniforms.update(self._lobes.uniforms(material))

@@ -58,6 +58,11 @@ class ScratchLobes(MaterialShading):
         self._textures: dict[str, dict[str, object]] = {}
         self._objects: list = []
 
+    def ibl_material(self, material: Scratched):
+        """The base: the pass lights it through lights.glsl (``base_brdf_eval``) and weights it by max(0, 1 − ᾱ)
+        per pixel itself — the finite part's mean share, in the material's own albedo curve, would count twice."""
+        return material.base
+
     def table_of(self, material: Scratched):
         """The material's scratch table as these settings compute it."""
         backend = self.settings.table_backend

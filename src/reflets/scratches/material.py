@@ -101,14 +101,6 @@ class Conductor(BaseModel):
     k: Annotated[float, Field(ge=0, allow_inf_nan=False)] | RGB = IRON_K
 
 
-class _GlslPath:
-    """``glsl`` of a scratched material: the twin compiled for its base's type (one file per base type)."""
-
-    def __get__(self, obj, cls=None) -> str:
-        name = "<base type>" if obj is None else obj.base.type
-        return f"reflets/scratches/shaders/scratched_{name}.glsl"
-
-
 @register_material
 class Scratched(Oriented, Material):
     """Layered scratched SV-BRDF (chapter 3 of the scratches document; docs/techniques/scratches.md).
@@ -174,7 +166,8 @@ class Scratched(Oriented, Material):
     seed: int = Field(0, ge=0)
     uv_scale: Positive = 1.0
     alpha_size: int = Field(512, ge=16, le=4096)
-    glsl: ClassVar = _GlslPath()
+    #: the finite part over the base's twin (``brdf_source`` puts them together)
+    glsl: ClassVar[str] = "reflets/scratches/shaders/scratched_finite.glsl"
 
     @field_validator("profile")
     @classmethod
@@ -202,12 +195,6 @@ class Scratched(Oriented, Material):
             raise ValueError('fresnel = "none" takes neither conductor nor ior')
         if self.base.cutout:  # the scratches pass neither cuts nor blends
             raise ValueError(f'a glTF base must be opaque (alpha_mode "{self.base.alpha_mode}" is not taken here)')
-        # the environment's split sum takes the base's constant albedos, the scratches pass no library hooks
-        mapped = [*getattr(self.base, "surface_textures", ()), *(["emission"] if getattr(self.base, "emission", None)
-                                                                  else [])]
-        if mapped:
-            raise ValueError(f"a library base takes no texture maps nor emission ({', '.join(dict.fromkeys(mapped))}): "
-                             'a glTF base (type = "gltf") takes textures here')  # fmt: skip
         if getattr(self.base, "transmissive", False):  # nor draws what lies behind
             raise ValueError("a glTF base must be opaque (a transmission factor is not taken here)")
         return self
@@ -273,6 +260,31 @@ class Scratched(Oriented, Material):
     # ------------------------------------------------------------------------------------------ evaluation
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         return self.base_weight() * self.base.eval(wo, wi)
+
+    @property
+    def brdf_source(self) -> str:
+        """The base's own twin (a library base's maps and hooks, glTF's material_surface) with its brdf_eval named
+        base_brdf_eval — what the scratches pass lights —, then the finite part s_base_weight · base_brdf_eval."""
+        from ..gpu.programs import register_source
+
+        base = self.base.brdf_source
+        text = "\n".join([
+            f"// Provides brdf_eval(wo, wi) of a scratched material over a {self.base.type} base (twin of "
+            "reflets/scratches/material.py), and base_brdf_eval, the base itself.",
+            "#define brdf_eval base_brdf_eval", f'#include "{base}"', "#undef brdf_eval", f'#include "{self.glsl}"',
+        ])  # fmt: skip
+        return register_source(f"{self.glsl}#over-{base}", text)
+
+    def lambertian_split(self):
+        """The finite part's Lambertian albedo (the base's × its share) and the rest: a method that integrates the
+        Lambertian part exactly — the environment's irradiance — does so for the base's."""
+        diffuse, rest = self.base.lambertian_split()
+        weight = self.base_weight()
+        return tuple(weight * d for d in diffuse), None if rest is None else self.model_copy(update={"base": rest})
+
+    def lobe_summary(self):
+        diffuse, kind, exponent = self.base.lobe_summary()
+        return tuple(self.base_weight() * d for d in diffuse), kind, exponent
 
     def sample(self, wo, u1, u2):
         return self.base.sample(wo, u1, u2)

@@ -348,7 +348,7 @@ class Forward(Technique):
             own_textures = shading.textures(material)
         vao = self.mesh_vertex_array(program, index)
         if self._ibl is not None:
-            uniforms.update(self._ibl.uniforms(material))
+            uniforms.update(self._ibl.uniforms(material if shading is None else shading.ibl_material(material)))
         textures = material.textures(ctx)
         # the images (not the split-sum table): their anisotropy is set at each draw, the textures being shared by
         # a context's renderers, each with its own texture_anisotropy

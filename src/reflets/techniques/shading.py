@@ -32,6 +32,11 @@ class MaterialShading:
     def uniforms(self, material) -> dict[str, object]:
         return dict(material.uniforms())
 
+    def ibl_material(self, material):
+        """The material whose split sum the prefiltered environment gives this shading's programs (lights.glsl's
+        ``brdf_eval`` there): the material itself, unless the shading lights a part of it."""
+        return material
+
     def textures(self, material) -> dict[str, object]:
         """Textures by sampler name (bound from unit 1 on); the shading releases what it creates. The dict
         returned is the one the pass binds every frame: a shading may replace its entries later."""

@@ -1,7 +1,0 @@
-// Provides brdf_eval(wo, wi) of a scratched material over a phong base (twin of reflets/scratches/material.py):
-// the finite part s_base_weight · ρ_b, and base_brdf_eval, the base itself (the scratches technique shades the
-// scratch lobes and weights the base per pixel).
-#define brdf_eval base_brdf_eval
-#include "reflets/brdf/glsl/phong.glsl"
-#undef brdf_eval
-#include "reflets/scratches/shaders/scratched_finite.glsl"
