@@ -1,12 +1,12 @@
 """Texture maps against the reference: library materials with mapped colours (a Lambert floor, a Phong ball with a
 diffuse map, a conductor with a specular map) under a point + a quad light and under the studio map; mapped lobe
 shapes (a conductor's roughness, a Phong exponent) under the same lights, and the others (Blinn-Phong, Ward,
-Ashikhmin-Shirley) under the point + quad; normal maps and a mapped emission under a
-point + a quad light; and a striped
-translucent marble under a quad light, the studio map (rough interface) and a point light (against the volumetric
-reference) — each beside the same scene without its maps against its own reference (docs/assets.md). Relative MSE
-(reflets.metrics.relmse) on 4 × 4-pixel block means for the library scene (96 × 72), per pixel for the marble's
-frame (64 × 48), as the tests measure them.
+Ashikhmin-Shirley) under the point + quad; normal maps and a mapped emission under a point + a quad light (and the
+maps left out against the mapped reference: how much they change the image); a striped translucent marble under a
+quad light, the studio map (rough interface) and a point light (against the volumetric reference) — each beside the
+same scene without its maps against its own reference (docs/assets.md). Relative MSE (reflets.metrics.relmse) on
+4 × 4-pixel block means for the library scenes (96 × 72), per pixel for the marble's frame (64 × 48), as the tests
+measure them.
 
     python tools/texture_maps.py
 """
@@ -49,11 +49,15 @@ def main() -> None:
         for kind, make, lighting in (("lobe shapes", lobe_maps_scene, both),
                                      ("normal maps + emission", surface_maps_scene, {"point + quad": [POINT, QUAD]})):
             for name, lights in lighting.items():
+                refs = {}
                 for mapped in (True, False):
                     scene = make(directory, lights, maps=mapped)
-                    ref = reference(scene, spp=32, pixel="box")
-                    error = relmse(blocks(reflets.render(scene, spp=16)), blocks(ref))
-                    print(f"library {kind}, {name}, {'mapped' if mapped else 'unmapped'}: {error:.2e}")
+                    refs[mapped] = ref = reference(scene, spp=32, pixel="box")
+                    image = blocks(reflets.render(scene, spp=16))
+                    print(f"library {kind}, {name}, {'mapped' if mapped else 'unmapped'}: "
+                          f"{relmse(image, blocks(ref)):.2e}")  # fmt: skip
+                print(f"library {kind}, {name}, the maps left out, against the mapped reference: "
+                      f"{relmse(image, blocks(refs[True])):.2e}")  # fmt: skip
         scene = other_lobe_maps_scene(directory, [POINT, QUAD])
         error = relmse(blocks(reflets.render(scene, spp=16)), blocks(reference(scene, spp=32, pixel="box")))
         print(f"library lobe shapes (Blinn-Phong, Ward, Ashikhmin-Shirley), point + quad, mapped: {error:.2e}")

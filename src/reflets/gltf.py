@@ -286,7 +286,7 @@ def _mapped_colours(name: str, source, exported: dict, textures: _Textures) -> l
             exported["emissiveTexture"] = textures.info(ref, True, where, notes)
         elif mapped and field == ("specular" if conductor else source.lambertian_field):
             exported["pbrMetallicRoughness"]["baseColorTexture"] = textures.info(ref, True, where, notes)
-        elif mapped and specular is not None and not conductor:
+        elif mapped and field == source.linear_specular and specular is not None and not conductor:
             specular["specularColorTexture"] = textures.info(ref, True, where, notes)
         else:
             notes.append(f"{where}: its texture has no glTF slot in this export (its factor is written alone)")

@@ -267,12 +267,12 @@ def test_mapped_lobe_shapes_under_lights_and_the_environment_as_the_reference(tm
 
     scene = lobe_maps_scene(tmp_path, [POINT, QUAD])
     ref = reflets.reference(scene, spp=32, pixel="box", progress=False).image
-    assert relmse(blocks(reflets.render(scene, spp=16)), blocks(ref)) < 1e-3  # measured 8.8e-5
+    assert relmse(blocks(reflets.render(scene, spp=16)), blocks(ref)) < 1e-3  # measured 9.1e-5
     factors = reflets.render(lobe_maps_scene(tmp_path, [POINT, QUAD], maps=False), spp=16)
-    assert relmse(blocks(factors), blocks(ref)) > 0.02  # the maps matter: 0.081
+    assert relmse(blocks(factors), blocks(ref)) > 0.01  # the maps matter: 0.033
     studio = [{"type": "environment", "file": str(default_environment())}]
     mapped, plain = error(lobe_maps_scene(tmp_path, studio)), error(lobe_maps_scene(tmp_path, studio, maps=False))
-    assert mapped < min(1.3 * plain, 0.03)  # measured 1.47e-2 mapped, 1.35e-2 with the factors
+    assert mapped < min(1.3 * plain, 0.03)  # measured 1.44e-2 mapped, 1.35e-2 with the factors
 
 
 def test_the_other_mapped_lobe_shapes_recompute_what_their_twins_derive(tmp_path):
@@ -280,4 +280,4 @@ def test_the_other_mapped_lobe_shapes_recompute_what_their_twins_derive(tmp_path
     exponents (their normalisation), each recomputed per fragment from the mapped value: as the reference."""
     scene = other_lobe_maps_scene(tmp_path, [POINT, QUAD])
     ref = reflets.reference(scene, spp=32, pixel="box", progress=False).image
-    assert relmse(blocks(reflets.render(scene, spp=16)), blocks(ref)) < 1e-3  # measured 1.8e-4
+    assert relmse(blocks(reflets.render(scene, spp=16)), blocks(ref)) < 1e-3  # measured 1.7e-4

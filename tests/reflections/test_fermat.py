@@ -301,8 +301,7 @@ def test_a_planar_mirror_shows_a_scratched_plate_as_the_mirrored_camera_sees_it(
 
     with_mirror, mirrored_camera = scene(0.5, [mirror, plate]), scene(-0.5, [plate])
     # the environment unoccluded in both: the mirror hides the sky below the plate from its base, where the
-    # mirrored camera's scene has no mirror (the base lit by its own split sum is 10x the finite part's curve that
-    # shaded it before, enough for that difference to show: 4e-3)
+    # mirrored camera's scene has no mirror (with the base lit by its own split sum, that difference shows)
     image = reflets.render(with_mirror, spp=256, environment_occlusion="none")
     expected = np.flipud(reflets.render(mirrored_camera, spp=256, environment_occlusion="none"))
     on_mirror = np.abs(reflets.render(with_mirror, method="position")[..., 1]) < 1e-4

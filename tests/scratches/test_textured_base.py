@@ -23,6 +23,7 @@ def plate(base: dict, coverage: float, light: dict, size):
         "materials": {"s": scratched},
         "mesh": [{"shape": "plane", "size": [2.4, 2.4], "material": "s"}],
         "light": [light],
+        "background": [0, 0, 0],  # (the environment map's own pixels are no part of a weighted base)
     })  # fmt: skip
 
 
@@ -63,29 +64,39 @@ def test_a_cut_out_or_blended_glTF_base_is_refused_in_one_line():
 
 @pytest.mark.parametrize("environment", [False, True])
 def test_scratches_over_a_library_base_with_maps(environment, tmp_path):
-    """A library base with a colour map, a normal map and emission, under a point light or the studio map: with no
-    scratch the scratches pass is the forward pass of the base (under the map too: the pass lights the base by the
-    base's own split sum and weights it per pixel — it used the finite part's curve, 21 % dark, and twice the share),
-    and the reference's finite part is the mapped base × its uncovered share."""
+    """A library base with a colour map, a mapped exponent, a normal map and emission, under a point light or the
+    studio map: with no scratch the scratches pass is the forward pass of the base (under the map too: the pass lights
+    the base by the base's own split sum); scratched, forward by name shows the finite part, the base × w̄_b (its
+    per-fragment split sum weighted in the twin); the reference's finite part is the mapped base × its uncovered
+    share."""
+    import warnings
+
     from reflets.bench.maps import UV_GRID, write_bumps
     from reflets.scene.assets import default_environment
 
     bumps = str(write_bumps(tmp_path / "bumps.png"))
     base = {"type": "phong", "kd": {"texture": str(UV_GRID), "factor": [0.6, 0.6, 0.6]}, "ks": [0.3, 0.3, 0.3],
-            "exponent": 30, "normalized": True, "normal_map": {"texture": bumps}, "emission": [0.05, 0.02, 0.0]}
+            "exponent": {"texture": str(UV_GRID), "factor": 60}, "normalized": True, "normal_map": {"texture": bumps},
+            "emission": [0.05, 0.02, 0.0]}  # fmt: skip
     light = {"type": "environment", "file": str(default_environment())} if environment else POINT
 
-    def scene(coverage):
-        return plate(base, coverage, light, (64, 48))
+    def scene(coverage, material=base):
+        return plate(material, coverage, light, (64, 48))
 
     bare = scene(0.0)
     alone = bare.model_copy(update={"materials": {"s": bare.materials["s"].base}})
     image = reflets.render(bare, method="scratches")
     np.testing.assert_allclose(image, reflets.render(alone, method="forward"), rtol=1e-4, atol=1e-5)
+    dark = {k: v for k, v in base.items() if k != "emission"}  # (emission is not weighted by the share)
+    covered = scene(0.02, dark)
+    weight = covered.materials["s"].base_weight()  # = 1 − ᾱ everywhere: a constant coverage
+    assert weight < 0.99
+    plain = reflets.render(covered.model_copy(update={"materials": {"s": covered.materials["s"].base}}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # forward on a scratched material: its finite part, said
+        np.testing.assert_allclose(reflets.render(covered, method="forward"), weight * plain, rtol=1e-4, atol=1e-5)
     if not environment:
-        covered = scene(0.02)
-        weight = covered.materials["s"].base_weight()
-        finite = reflets.reference(covered, spp=4, progress=False).image
+        finite = reflets.reference(scene(0.02), spp=4, progress=False).image
         emitted = reflets.reference(alone.model_copy(update={"light": []}), spp=4, progress=False).image
         lit = reflets.reference(alone, spp=4, progress=False).image - emitted  # the share weights the BRDF alone
         np.testing.assert_allclose(finite, weight * lit + emitted, rtol=1e-4, atol=1e-6)

@@ -103,8 +103,8 @@ def surface_maps_scene(directory: str | Path, lights: list, size=(96, 72), maps:
 
 
 def _bands(directory: str | Path) -> str:
-    """A map of four grey bands (R 0.25 … 1 along v), written to ``directory``/bands.png."""
-    bands = np.repeat(np.array([64, 128, 191, 255], np.uint8), 4)[:, None].repeat(16, axis=1)
+    """A map of four grey bands (R 0.125, 0.375, 0.625, 1 along v: linear data), written to ``directory``/bands.png."""
+    bands = np.repeat(np.array([32, 96, 159, 255], np.uint8), 4)[:, None].repeat(16, axis=1)
     Image.fromarray(np.dstack([bands] * 3)).save(Path(directory) / "bands.png")
     return str(Path(directory) / "bands.png")
 
@@ -125,7 +125,7 @@ def _two_balls(materials: dict, lights: list, size) -> Scene:
 
 
 def lobe_maps_scene(directory: str | Path, lights: list, size=(96, 72), maps: bool = True) -> Scene:
-    """Lobe shapes read from a map of four grey bands (R 0.25 … 1): a GGX conductor's roughness α (factor 0.6) and a
+    """Lobe shapes read from a map of four grey bands (``_bands``): a GGX conductor's roughness α (factor 0.6) and a
     Phong ball's exponent (factor 200); ``maps`` False: the factors alone."""
     texture = _bands(directory)
     metal = {"type": "microfacet", "fresnel": "conductor", "alpha": 0.6}

@@ -95,7 +95,7 @@ class AshikhminShirley(HalfVectorLobeMixture, Oriented, Mapped):
     glsl = "reflets/brdf/glsl/ashikhmin_shirley.glsl"
 
     @property
-    def norm(self) -> float:
+    def norm(self) -> float | np.ndarray:
         return np.sqrt((np.asarray(self.nu) + 1.0) * (np.asarray(self.nv) + 1.0))  # per point when mapped
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:

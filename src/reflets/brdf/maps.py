@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -76,10 +76,30 @@ class LobeMap:
     for the mapped values (assigned first)."""
 
     low: float
-    widest: str
+    widest: Literal["min", "max"]
     column: bool = False
     uniform: str | None = ""  # "": m_<field>
     derived: tuple[tuple[str, str], ...] = ()
+
+
+def lobe_node_texels() -> np.ndarray:
+    """The texel values the split sum's curves of a mapped lobe shape are computed at: (k / (LOBE_NODES − 1))²,
+    denser near 0 — where an exponent's lobe widens fastest (a Phong exponent of 200 × t: α 1 at t = 0, 0.33 at
+    t = 0.02, 0.05 at t = 1) — and interpolated in √t by the twin (``_lobe_ibl``)."""
+    return np.linspace(0.0, 1.0, LOBE_NODES) ** 2
+
+
+_EXTREMES: dict[tuple[str, str], float] = {}
+
+
+def _red_extreme(data, widest: str) -> float:
+    """The largest or smallest R of a decoded texture (remembered by its content key: the reference asks at every
+    bounce)."""
+    key = (data.key, widest)
+    if key not in _EXTREMES:
+        red = data.texels[..., 0]
+        _EXTREMES[key] = float(red.max() if widest == "max" else red.min())
+    return _EXTREMES[key]
 
 
 class NormalMap(TextureRef):
@@ -144,9 +164,10 @@ class Mapped(Material):
                         f"{', '.join(allowed)} (the colours the BRDF is linear in, the lobe shapes its twin reads "
                         'directly; normal_map and occlusion too; type = "gltf" maps roughness and metalness)'
                     )
-            lobes = [key for key in maps if key in cls.lobe_maps]
-            if any(maps[key] != maps[lobes[0]] for key in lobes):  # (the same texture and uv, as dumped)
-                raise ValueError(f"{' and '.join(lobes)} read different textures: mapped lobe shapes must read "
+            lobes = [TextureRef.model_validate(maps[key]) for key in maps if key in cls.lobe_maps]
+            if any(ref != lobes[0] for ref in lobes):  # the same file, uv, transform…
+                names = [key for key in maps if key in cls.lobe_maps]
+                raise ValueError(f"{' and '.join(names)} read different textures: mapped lobe shapes must read "
                                  "the same one (the prefiltered environment interpolates its curves at one texel)")
             data["maps"] = maps
         if "emission" in maps and data.get("emission") is None:
@@ -213,17 +234,16 @@ class Mapped(Material):
         """The material with each mapped lobe shape at the texture's value that widens it most."""
 
         def extreme(field: str) -> float:
-            red = self.texture_data(field).texels[..., 0]
-            return float(red.max() if self.lobe_maps[field].widest == "max" else red.min())
+            return _red_extreme(self.texture_data(field), self.lobe_maps[field].widest)
 
         return self._at_texel(extreme) if self.mapped_lobes else self
 
     def lobe_nodes(self) -> list[Mapped] | None:
-        """The material at ``LOBE_NODES`` texel values from 0 to 1 of its mapped lobe shape (what the prefiltered
-        environment's albedo curves are computed at), or None when no lobe shape is mapped."""
+        """The material at the ``LOBE_NODES`` texel values of ``lobe_node_texels`` of its mapped lobe shape (what
+        the prefiltered environment's albedo curves are computed at), or None when no lobe shape is mapped."""
         if not self.mapped_lobes:
             return None
-        return [self._at_texel(lambda _, t=t: t) for t in np.linspace(0.0, 1.0, LOBE_NODES)]
+        return [self._at_texel(lambda _, t=t: t) for t in lobe_node_texels()]
 
     def shading_frame(self, frame: np.ndarray, uv: np.ndarray) -> np.ndarray:
         """The frames turned by the normal map (GLSL ``normal_mapped_frame``)."""
@@ -244,11 +264,11 @@ class Mapped(Material):
         return lookup(self.maps[field], self.texture_data(field), uv, field)[:, :3]
 
     def texture_data(self, field: str):
-        """The decoded texture of a mapped field (colour: sRGB unless its ``srgb`` says otherwise) or of a surface
-        map (``normal_map``, ``occlusion``: linear data)."""
+        """The decoded texture of a mapped field (a colour: sRGB unless its ``srgb`` says otherwise; a lobe shape:
+        linear data) or of a surface map (``normal_map``, ``occlusion``: linear data)."""
         if field in SURFACE_MAPS:
             return load_texture(getattr(self, field), False)
-        return load_texture(self.maps[field], True)
+        return load_texture(self.maps[field], field not in self.lobe_maps)  # a lobe shape's map is data
 
     # ------------------------------------------------------------------ the GLSL twin
 
@@ -342,7 +362,8 @@ class Mapped(Material):
 
     def _lobe_ibl(self, scale: list[str]) -> list[str]:
         """A mapped lobe shape's split sum (lights.glsl's MATERIAL_IBL): the albedo curves and equivalent roughness
-        at ``LOBE_NODES`` texel values (``lobe_nodes``; ibl.py sets them) interpolated at the fragment's texel, the
+        at ``LOBE_NODES`` texel values (``lobe_nodes``; ibl.py sets them) interpolated at the fragment's texel (in
+        √t, the nodes' spacing), the
         mapped colours' texels on them as ``material_ibl_scale`` puts them; the diffuse albedo is the model's own."""
         if not self.mapped_lobes:
             return []
@@ -354,7 +375,7 @@ class Mapped(Material):
             "uniform vec3 u_map_ibl_albedo[IBL_NODES * MAP_IBL_NODES];  // node j's curve at [j * IBL_NODES + k]",
             "uniform float u_map_ibl_alpha[MAP_IBL_NODES];",
             "void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 albedo, out float alpha) {",
-            f"    float s = clamp(t_map_{self.mapped_lobes[0]}, 0.0, 1.0) * float(MAP_IBL_NODES - 1);",
+            f"    float s = sqrt(clamp(t_map_{self.mapped_lobes[0]}, 0.0, 1.0)) * float(MAP_IBL_NODES - 1);",
             "    int j = min(int(s), MAP_IBL_NODES - 2);",
             "    float node = clamp(mu, 0.0, 1.0) * float(IBL_NODES) - 0.5;",
             "    int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);",

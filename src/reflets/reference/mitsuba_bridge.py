@@ -173,7 +173,8 @@ def material_to_mitsuba(name: str, material) -> dict[str, Any]:
     kind = getattr(material, "type", type(material).__name__)
     if getattr(material, "orientation", None) is not None:  # Mitsuba's tangents come from the uv, not ours
         raise _unsupported(name, kind, "an orientation field (per-vertex tangents)")
-    maps = [*getattr(material, "surface_textures", ()), *(["emission"] if getattr(material, "emission", None) else [])]
+    maps = [*getattr(material, "surface_textures", ()), *(["emission"] if any(getattr(material, "emission", None) or ())
+                                                          else [])]  # fmt: skip
     if maps:  # the bridge writes a library material's constant factors only
         raise _unsupported(name, kind, f"maps or emission on a library material ({', '.join(dict.fromkeys(maps))}; "
                            'a glTF material, type = "gltf", takes textures there)')  # fmt: skip

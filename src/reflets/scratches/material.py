@@ -126,7 +126,8 @@ class Scratched(Oriented, Material):
         Rays per φ_in column of the table.
     base : material table, default GGX α = 0.08 with iron's conductor Fresnel
         The base BRDF ρ_b: any type but scratched, translucent and mirror (a measured file is not resolved
-        against the scene folder); a ``gltf`` base's textures are read per pixel.
+        against the scene folder); its textures are read per pixel (a ``gltf`` base's, a library base's maps, normal
+        map and emission).
     preset : "3.14b" | "3.14c" | "3.14d" | "3.11bde" | "3.11f" | "3.15a" | "3.15b" | "3.15c" | "3.15d" | "3.17a"
         | "3.17b", default "3.14b" when no layer parameter is given
         A row of the document's Table 3.1; the explicit parameters below override it.
@@ -263,17 +264,26 @@ class Scratched(Oriented, Material):
 
     @property
     def brdf_source(self) -> str:
-        """The base's own twin (a library base's maps and hooks, glTF's material_surface) with its brdf_eval named
-        base_brdf_eval — what the scratches pass lights —, then the finite part s_base_weight · base_brdf_eval."""
+        """The base's own twin (a library base's maps and hooks, glTF's material_surface) with its brdf_eval (and
+        per-fragment split sum, if any) named base_* — what the scratches pass lights —, then the finite part:
+        s_base_weight × the base's."""
         from ..gpu.programs import register_source
 
         base = self.base.brdf_source
         text = "\n".join([
             f"// Provides brdf_eval(wo, wi) of a scratched material over a {self.base.type} base (twin of "
             "reflets/scratches/material.py), and base_brdf_eval, the base itself.",
-            "#define brdf_eval base_brdf_eval", f'#include "{base}"', "#undef brdf_eval", f'#include "{self.glsl}"',
+            "#define brdf_eval base_brdf_eval", "#define material_ibl base_material_ibl",
+            "#define material_coat_ibl base_material_coat_ibl", f'#include "{base}"',
+            "#undef brdf_eval", "#undef material_ibl", "#undef material_coat_ibl", f'#include "{self.glsl}"',
         ])  # fmt: skip
         return register_source(f"{self.glsl}#over-{base}", text)
+
+    def lobe_nodes(self):
+        """The base's mapped lobe at its nodes (``maps.Mapped.lobe_nodes``): the finite part's split sum weights the
+        base's curves in its twin (scratched_finite.glsl)."""
+        nodes = getattr(self.base, "lobe_nodes", None)
+        return nodes() if nodes is not None else None
 
     def lambertian_split(self):
         """The finite part's Lambertian albedo (the base's × its share) and the rest: a method that integrates the

@@ -199,10 +199,10 @@ class PrefilteredEnvironment:
             return maps
         untinted = material.ibl_interface
         lobes = material.lobe_nodes() if hasattr(material, "lobe_nodes") else None
-        if lobes is not None:  # a mapped lobe shape: the curves at the texel values of maps.LOBE_NODES
+        if lobes is not None:  # a mapped lobe shape: the curves at maps.lobe_node_texels (its MATERIAL_IBL reads them)
             curves = np.concatenate([cached_specular_albedo(m) for m in lobes])
-            maps["u_map_ibl_albedo"] = curves.astype(np.float32).tobytes()
-            maps["u_map_ibl_alpha"] = np.array([equivalent_alpha(m) for m in lobes], np.float32).tobytes()
+            return {"u_map_ibl_albedo": curves.astype(np.float32).tobytes(),
+                    "u_map_ibl_alpha": np.array([equivalent_alpha(m) for m in lobes], np.float32).tobytes(), **maps}
         return {
             "u_ibl_albedo": cached_specular_albedo(material).astype(np.float32).tobytes(),
             "u_ibl_diffuse": tuple(float(c) for c in material.lambertian_split()[0]),

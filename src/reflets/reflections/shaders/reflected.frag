@@ -10,10 +10,14 @@
 // (#include inlines a file once, whatever the #if around it: lights.glsl is included in one place)
 #if SCRATCHED
 #define brdf_eval base_brdf_eval
+#define material_ibl base_material_ibl
+#define material_coat_ibl base_material_coat_ibl
 #endif
 #include "reflets/techniques/shaders/lights.glsl"
 #if SCRATCHED
 #undef brdf_eval
+#undef material_ibl
+#undef material_coat_ibl
 #include "reflets/scratches/shaders/scratch_lobes.glsl"
 #endif
 #endif
@@ -72,13 +76,13 @@ void main() {
 #endif
     vec3 wo = transpose(frame) * normalize(to_eye);
 #if SCRATCHED
-    f_color = vec4(scratched_radiance(v_position, frame, wo, v_uv, uvec2(gl_FragCoord.xy)), 1.0);
+    vec3 radiance = scratched_radiance(v_position, frame, wo, v_uv, uvec2(gl_FragCoord.xy));
 #else
     vec3 radiance = direct_lighting(v_position, frame, wo);
+#endif
 #ifdef MATERIAL_SURFACE
     radiance += material_emission();
 #endif
     f_color = vec4(radiance, 1.0);
-#endif
 #endif
 }

@@ -2,8 +2,12 @@
 // fragment, seen from the camera.
 #include BRDF
 #define brdf_eval base_brdf_eval
+#define material_ibl base_material_ibl
+#define material_coat_ibl base_material_coat_ibl
 #include "reflets/techniques/shaders/lights.glsl"
 #undef brdf_eval
+#undef material_ibl
+#undef material_coat_ibl
 #include "reflets/scratches/shaders/scratch_lobes.glsl"
 
 in vec3 v_position;
