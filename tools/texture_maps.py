@@ -1,7 +1,8 @@
 """Texture maps against the reference: library materials with mapped colours (a Lambert floor, a Phong ball with a
 diffuse map, a conductor with a specular map) under a point + a quad light and under the studio map; mapped lobe
 shapes (a conductor's roughness, a Phong exponent) under the same lights, and the others (Blinn-Phong, Ward,
-Ashikhmin-Shirley) under the point + quad; normal maps and a mapped emission under a point + a quad light (and the
+Ashikhmin-Shirley) under the point + quad; affine colours (a Schlick F₀, Ashikhmin-Shirley's rs and rd) under a
+point + a quad light and the studio map; normal maps and a mapped emission under a point + a quad light (and the
 maps left out against the mapped reference: how much they change the image); a striped translucent marble under a
 quad light, the studio map (rough interface) and a point light (against the volumetric reference) — each beside the
 same scene without its maps against its own reference (docs/assets.md). Relative MSE (reflets.metrics.relmse) on
@@ -22,6 +23,7 @@ from reflets.bench.maps import (
     MARBLE_QUAD,
     POINT,
     QUAD,
+    affine_maps_scene,
     lobe_maps_scene,
     mapped_scene,
     other_lobe_maps_scene,
@@ -61,6 +63,16 @@ def main() -> None:
         scene = other_lobe_maps_scene(directory, [POINT, QUAD])
         error = relmse(blocks(reflets.render(scene, spp=16)), blocks(reference(scene, spp=32, pixel="box")))
         print(f"library lobe shapes (Blinn-Phong, Ward, Ashikhmin-Shirley), point + quad, mapped: {error:.2e}")
+        for name, lights in (("point + quad", [POINT, QUAD]), ("studio map", [ENV])):
+            refs = {}
+            for mapped in (True, False):
+                scene = affine_maps_scene(lights, maps=mapped)
+                refs[mapped] = reference(scene, spp=32, pixel="box")
+                image = blocks(reflets.render(scene, spp=16))
+                print(f"library affine colours, {name}, {'mapped' if mapped else 'unmapped'}: "
+                      f"{relmse(image, blocks(refs[mapped])):.2e}")  # fmt: skip
+            print(f"library affine colours, {name}, the maps left out, against the mapped reference: "
+                  f"{relmse(image, blocks(refs[True])):.2e}")  # fmt: skip
         for name, light, roughness, engine in (("quad", MARBLE_QUAD, 0.0, "numpy"), ("studio map", ENV, 0.3, "numpy"),
                                                ("point", MARBLE_POINT, 0.0, "volumetric")):  # fmt: skip
             for mapped in (True, False):

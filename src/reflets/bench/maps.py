@@ -148,3 +148,17 @@ def other_lobe_maps_scene(directory: str | Path, lights: list, size=(96, 72)) ->
     front = {"type": "ashikhmin_shirley", "rs": [0.05, 0.05, 0.05], "rd": [0.4, 0.3, 0.2],
              "nu": {"texture": texture, "factor": 400}, "nv": {"texture": texture, "factor": 40}}  # fmt: skip
     return _two_balls({"ball": ball, "metal": metal, "front": front}, lights, size)
+
+
+def affine_maps_scene(lights: list, size=(96, 72), maps: bool = True) -> Scene:
+    """Colours a BRDF is affine in, from the uv grid: a GGX ball's Schlick F₀ (factor 0.6) and an Ashikhmin-Shirley
+    ball's rs (factor 0.3) and rd (factor 0.6, the grid tiled 2 × 2); ``maps`` False: the factors alone."""
+    grid = str(UV_GRID)
+    ball = {"type": "microfacet", "fresnel": "schlick", "alpha": 0.25, "diffuse": [0.2, 0.2, 0.2],
+            "specular": [0.6, 0.6, 0.6]}  # fmt: skip
+    metal = {"type": "ashikhmin_shirley", "rs": [0.3, 0.3, 0.3], "rd": [0.6, 0.6, 0.6], "nu": 200, "nv": 20}
+    if maps:
+        ball["specular"] = {"texture": grid, "factor": [0.6, 0.6, 0.6]}
+        metal["rs"] = {"texture": grid, "factor": [0.3, 0.3, 0.3]}
+        metal["rd"] = {"texture": grid, "factor": [0.6, 0.6, 0.6], "transform": {"scale": [2, 2]}}
+    return _two_balls({"ball": ball, "metal": metal}, lights, size)

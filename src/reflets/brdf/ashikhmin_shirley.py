@@ -89,6 +89,12 @@ class AshikhminShirley(HalfVectorLobeMixture, Oriented, Mapped):
         for name in ("nu", "nv")
     }
 
+    @classmethod
+    def affine_colours(cls, data: dict | None = None) -> tuple[str, ...]:
+        """rs (its Fresnel term's F₀ and the diffuse term's 1 − rs) and rd (the diffuse term's colour, over an
+        rs-dependent specular): affine in each, bilinear together."""
+        return ("rs", "rd")
+
     def lobe_summary(self):  # its diffuse term is not Lambertian: none split off
         return (0.0, 0.0, 0.0), 2, float(np.sqrt(self.nu * self.nv))
 

@@ -48,11 +48,11 @@ anisotropically oriented sphere (tests/test_gpu_vs_reference.py).
 
 ## Texture maps
 
-A colour the BRDF is linear in — the Lambertian albedo and the colour scaling the rest — may be read from an image,
-multiplied by a factor (the field's value; default 1), as glTF's factors and textures are (`reflets.brdf.maps`); so
-may the lobe shapes (the microfacet and Ward roughness `alpha`, the Phong and Blinn-Phong `exponent`,
-Ashikhmin–Shirley's `nu` / `nv`: factor × the texel's R); and every library material takes a normal map, an emission
-and an ambient occlusion map:
+A colour the BRDF is linear in — the Lambertian albedo and the colour scaling the rest — or affine in (a Schlick F₀,
+Ashikhmin–Shirley's `rs` and `rd`) may be read from an image, multiplied by a factor (the field's value; default 1), as
+glTF's factors and textures are (`reflets.brdf.maps`); so may the lobe shapes (the microfacet and Ward roughness
+`alpha`, the Phong and Blinn-Phong `exponent`, Ashikhmin–Shirley's `nu` / `nv`: factor × the texel's R); and every
+library material takes a normal map, an emission and an ambient occlusion map:
 
 ```toml
 [materials.wood]
@@ -65,18 +65,19 @@ emission = { texture = "embers.png", factor = [3, 1, 0.2] }
 occlusion = { texture = "wood_ao.png", strength = 1.0 }
 ```
 
-The other keys are a texture's (`uv`, `srgb`, `transform`, `wrap`, `filter`, `channels`: docs/assets.md,
-*Textures*). Both renderers read the texels into the parameters before evaluating the BRDF (GPU: `material_surface`,
-trilinear and anisotropic mips; reference: bilinear lookups at each hit, averaged over a supersampled pixel). The
-prefiltered environment scales the albedos by a colour map's texels — exact for a linear colour — and, for a mapped
-lobe shape, interpolates albedo curves and prefiltered levels computed at eight texel values. A normal map (glTF's
-encoding) turns the shading frame in both renderers; emission adds to every pass; occlusion darkens the
-environment's light only (glTF's rule; the references trace occlusion themselves). Lafortune's lobes and colours
-the BRDF is not linear in (a Schlick F₀, Ashikhmin–Shirley's `rs`) are refused with the list of what can be mapped:
-glTF's material (`type = "gltf"`) maps metalness and the rest. The area-light methods that integrate constant
-parameters (`ltc`, `analytic`, `biased`) leave a material with mapped colours or lobes to `forward` in `auto` (asked
-for by name, they integrate the factors and say so); a normal map, emission or occlusion alone keeps them.
-Measured against the reference: docs/assets.md, *Textures on the library's materials*.
+The other keys are a texture's (`uv`, `srgb`, `transform`, `wrap`, `filter`, `channels`: docs/assets.md, *Textures*).
+Both renderers read the texels into the parameters before evaluating the BRDF (GPU: `material_surface`, trilinear and
+anisotropic mips; reference: bilinear lookups at each hit, averaged over a supersampled pixel). The prefiltered
+environment scales the albedos by a colour map's texels — exact for a linear colour —, mixes per channel between the
+albedo curves at 0 and at the factors for an affine one (bilinearly for two: exact too) and, for a mapped lobe shape,
+interpolates albedo curves and prefiltered levels computed at eight texel values. A normal map (glTF's encoding) turns
+the shading frame in both renderers; emission adds to every pass; occlusion darkens the environment's light only (glTF's
+rule; the references trace occlusion themselves). Lafortune's lobes, a mirror's colours (its reflections are traced) and
+an affine colour together with a mapped lobe shape are refused in one line: glTF's material (`type = "gltf"`) maps
+metalness and the rest. The area-light methods that integrate constant parameters (`ltc`, `analytic`, `biased`) leave a
+material with mapped colours or lobes to `forward` in `auto` (asked for by name, they integrate the factors and say so);
+a normal map, emission or occlusion alone keeps them. Measured against the reference: docs/assets.md, *Textures on the
+library's materials*.
 
 | type | reciprocal | energy conserving | texture maps |
 |---|---|---|---|
@@ -100,7 +101,7 @@ PROPERTIES = {
 
 #: what may be a texture, where the model does not say it itself (``Mapped.mappable``)
 MAPS = {
-    "microfacet": "`diffuse`, `specular` (not a Schlick F₀), `alpha`",
+    "microfacet": "`diffuse`, `specular` (a Schlick F₀ too: affine), `alpha`",
     "gltf": "every factor (its `*_texture` slots)",
     "scratched": "its base's textures and maps",
     "translucent": "`albedo_texture`: the light leaving the medium × its texel",
@@ -113,7 +114,7 @@ def maps(name: str) -> str:
     cls = MATERIALS[name]
     if name in MAPS:
         return MAPS[name]
-    mappable = (*cls.mappable(), *cls.lobe_maps) if issubclass(cls, Mapped) else ()
+    mappable = (*cls.mappable(), *cls.affine_colours(), *cls.lobe_maps) if issubclass(cls, Mapped) else ()
     return ", ".join(f"`{field}`" for field in mappable) or "none"
 
 

@@ -1,8 +1,8 @@
-"""Texture maps on the BRDF library's materials: colours read from textures (``albedo = { texture = "wood.png" }``
-for Lambert, ``kd`` / ``ks`` for Phong, Blinn-Phong and Ward, ``diffuse`` / ``specular`` for the microfacet model,
-``kd`` for Lafortune's), lobe shapes (the microfacet and Ward roughness ``alpha``, the Phong and Blinn-Phong
-``exponent``, Ashikhmin–Shirley's ``nu`` / ``nv``), and on every one of them a normal map, emission and ambient
-occlusion, as glTF's material has them:
+"""Texture maps on the BRDF library's materials: colours read from textures (``albedo = { texture = "wood.png" }`` for
+Lambert, ``kd`` / ``ks`` for Phong, Blinn-Phong and Ward, ``diffuse`` / ``specular`` for the microfacet model, ``kd``
+for Lafortune's, ``rs`` / ``rd`` for Ashikhmin–Shirley's), lobe shapes (the microfacet and Ward roughness ``alpha``, the
+Phong and Blinn-Phong ``exponent``, Ashikhmin–Shirley's ``nu`` / ``nv``), and on every one of them a normal map,
+emission and ambient occlusion, as glTF's material has them:
 
     albedo = { texture = "wood.png", factor = [0.9, 0.9, 0.9], uv = 0, srgb = true, transform = { scale = [4, 4] } }
     exponent = { texture = "wood_gloss.png", factor = 200 }
@@ -19,9 +19,11 @@ Which colours can be maps: those the BRDF is linear in, per channel — the Lamb
 and the colour scaling the rest (``linear_specular``). Every renderer then stays exact with the map: the GLSL twin
 reads the texel into the colour before ``brdf_eval`` (``material_surface``, as glTF's material does), the NumPy
 reference evaluates the BRDF with per-point colours (:meth:`Mapped.at`), and the prefiltered environment scales
-the material's albedos by the texels (``material_ibl_scale``: exact for a linear colour). A colour the BRDF is not
-linear in (a Schlick F₀, Ashikhmin–Shirley's ``rs``) and Lafortune's lobes are refused with the list of what can be
-mapped.
+the material's albedos by the texels (``material_ibl_scale``: exact for a linear colour). A colour the BRDF is affine
+in per channel (``affine_colours``: a Schlick F₀, Ashikhmin–Shirley's ``rs`` and ``rd``) is read the same way, and
+the split sum mixes per channel between the albedo curves at 0 and at the factors (bilinearly for two such colours:
+exact, the albedo being affine in each). Lafortune's lobes and a mirror's colours are refused with the list of what
+can be mapped.
 
 A mapped lobe shape: the twin recomputes per fragment the uniforms it reads for it (the value itself, or what is
 derived from it in float64 for constant lobes — Ward's 1/α, a normalisation: ``LobeMap.derived``); the reference
@@ -133,6 +135,12 @@ class Mapped(Material):
         emission may be mapped too."""
         return tuple(f for f in (cls.lambertian_field, cls.linear_specular) if f is not None)
 
+    @classmethod
+    def affine_colours(cls, data: dict | None = None) -> tuple[str, ...]:
+        """The colours the BRDF is affine in per channel, not linear (f = f₀ + c (f₁ − f₀): a Schlick F₀, which the
+        split sum interpolates between its curves at 0 and at the factor, ``affine_zeros``); none by default."""
+        return ()
+
     @model_validator(mode="before")
     @classmethod
     def _split_maps(cls, data):
@@ -155,15 +163,20 @@ class Mapped(Material):
             elif key in cls.model_fields:
                 data[key] = (1.0, 1.0, 1.0)
         if maps:
-            allowed = (*cls.mappable(data), *cls.lobe_maps, "emission")
+            allowed = (*cls.mappable(data), *cls.affine_colours(data), *cls.lobe_maps, "emission")
             for key in maps:
                 if key not in allowed:
                     name = cls.model_fields["type"].default
                     raise ValueError(
                         f"{key} cannot be a texture in a {name} material; textures are accepted for: "
-                        f"{', '.join(allowed)} (the colours the BRDF is linear in, the lobe shapes its twin reads "
-                        'directly; normal_map and occlusion too; type = "gltf" maps roughness and metalness)'
+                        f"{', '.join(allowed)} (the colours the BRDF is linear or affine in, the lobe shapes its "
+                        'twin reads directly; normal_map and occlusion too; type = "gltf" maps the rest)'
                     )
+            affine = [key for key in maps if key in cls.affine_colours(data)]
+            if len(affine) > 2 or (affine and any(key in cls.lobe_maps for key in maps)):
+                raise ValueError(f"{', '.join(affine)} and {', '.join(k for k in maps if k in cls.lobe_maps) or 'more'}"
+                                 " cannot all be textures: the prefiltered environment interpolates at most two "
+                                 "affine colours, and not with a mapped lobe shape")  # fmt: skip
             lobes = [TextureRef.model_validate(maps[key]) for key in maps if key in cls.lobe_maps]
             if any(ref != lobes[0] for ref in lobes):  # the same file, uv, transform…
                 names = [key for key in maps if key in cls.lobe_maps]
@@ -216,6 +229,20 @@ class Mapped(Material):
             return tuple(np.maximum(f * np.asarray(texels, np.float64), spec.low) for f in factor)
         value = np.maximum(factor * np.asarray(texels, np.float64), spec.low)
         return value[:, None] if spec.column and np.ndim(value) == 1 else value
+
+    @property
+    def mapped_affine(self) -> list[str]:
+        """The affine colours read from maps (at most two)."""
+        return [field for field in type(self).affine_colours(dict(self)) if field in (self.maps or {})]
+
+    def affine_zeros(self) -> list[Mapped] | None:
+        """The material with its mapped affine colours at 0 — the first, the second, both — (what the split sum
+        interpolates between per channel: exact, the albedo being affine in each), or None when none is mapped."""
+        fields = self.mapped_affine
+        if not fields:
+            return None
+        subsets = [fields[:1], fields[1:], fields][: 1 if len(fields) == 1 else 3]
+        return [self.model_copy(update=dict.fromkeys(subset, (0.0, 0.0, 0.0))) for subset in subsets]
 
     @property
     def mapped_lobes(self) -> list[str]:
@@ -326,10 +353,12 @@ class Mapped(Material):
             surface += [f"    vec3 local = {texel('m_normal_map', self.normal_map)}.xyz * 2.0 - 1.0;",
                         "    local.xy *= m_normal_scale;",
                         "    frame = normal_mapped_frame(frame, local);"]  # fmt: skip
+        affine = self.mapped_affine
         scale = [f"    {albedo} *= t_map_{field};"
                  for albedo, field in (("diffuse_albedo", self.lambertian_field), ("albedo", self.linear_specular))
-                 if field in maps]  # fmt: skip
+                 if field in maps and field not in affine]  # fmt: skip
         lines += self._lobe_ibl(scale)
+        scale += self._affine_ibl(affine, lines)
         text = "\n".join([
             *lines,
             "#define MATERIAL_SURFACE 1",
@@ -337,14 +366,36 @@ class Mapped(Material):
             "void material_surface(vec4 uvs, inout mat3 frame) {",
             *surface,
             "}",
-            "// the prefiltered environment's albedos (of the factors) scaled by the texels: exact for linear colours",
-            "void material_ibl_scale(vec3 untinted, inout vec3 diffuse_albedo, inout vec3 albedo) {",
+            "// the prefiltered environment's albedos (of the factors) scaled by the texels: exact for linear colours,",
+            "// interpolated from the curves at 0 for affine ones",
+            "void material_ibl_scale(float mu, vec3 untinted, inout vec3 diffuse_albedo, inout vec3 albedo) {",
             *scale,
             "}",
             '#include "reflets/brdf/glsl/surface_hooks.glsl"',
         ])  # fmt: skip
         digest = hashlib.sha256(text.encode()).hexdigest()[:16]
         return register_source(f"{self.glsl}#maps-{digest}", text)
+
+    @staticmethod
+    def _affine_ibl(affine: list[str], lines: list[str]) -> list[str]:
+        """``material_ibl_scale``'s lines for mapped affine colours A (and B): the albedo at the texels t is
+        mix(A at 0, the factors' albedo, t_A) per channel — bilinear with B, between the curves with A, B, both at 0
+        (``u_map_ibl_zero0``, ``1``, ``2``: ``affine_zeros``, which ibl.py sets); exact, the albedo being affine in
+        each. (Declared here, next to the twin's other uniforms, for a program with the prefiltered environment.)"""
+        if not affine:
+            return []
+        count = 1 if len(affine) == 1 else 3
+        lines += ["#if defined(ENV_IBL) && ENV_IBL",
+                  *[f"uniform vec3 u_map_ibl_zero{j}[IBL_NODES];" for j in range(count)], "#endif"]  # fmt: skip
+        at = [f"    vec3 z{j} = mix(u_map_ibl_zero{j}[k0], u_map_ibl_zero{j}[k1], fk);" for j in range(count)]
+        a = f"t_map_{affine[0]}"
+        mixed = (f"    albedo = mix(z0, albedo, {a});" if count == 1 else
+                 f"    albedo = mix(mix(z2, z1, {a}), mix(z0, albedo, {a}), t_map_{affine[1]});")  # fmt: skip
+        return ["#if defined(ENV_IBL) && ENV_IBL",
+                "    float node = clamp(mu, 0.0, 1.0) * float(IBL_NODES) - 0.5;",
+                "    int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);",
+                "    float fk = clamp(node - float(k0), 0.0, 1.0);",
+                *at, mixed, "#endif"]  # fmt: skip
 
     def _fragment_values(self) -> dict[str, tuple[str, str]]:
         """The twin's uniforms a mapped field replaces per fragment (uniform → (field, expression)): a colour's

@@ -245,9 +245,14 @@ class Microfacet(Oriented, Mapped):
 
     @classmethod
     def mappable(cls, data: dict | None = None) -> tuple[str, ...]:
-        """Both colours, but not a Schlick F₀ (the BRDF is affine in it, not linear)."""
+        """Both colours, but not a Schlick F₀ (the BRDF is affine in it, not linear: ``affine_colours``)."""
         fresnel = (data or {}).get("fresnel", "none")
         return ("diffuse",) if fresnel == "schlick" else ("diffuse", "specular")
+
+    @classmethod
+    def affine_colours(cls, data: dict | None = None) -> tuple[str, ...]:
+        """A Schlick F₀: F = F₀ + (1 − F₀)(1 − cos)⁵."""
+        return ("specular",) if (data or {}).get("fresnel", "none") == "schlick" else ()
 
     def lobe_summary(self):
         return tuple(float(c) for c in self.diffuse), 2, blinn_phong_exponent(self.alpha)

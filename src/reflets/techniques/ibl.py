@@ -203,6 +203,9 @@ class PrefilteredEnvironment:
             curves = np.concatenate([cached_specular_albedo(m) for m in lobes])
             return {"u_map_ibl_albedo": curves.astype(np.float32).tobytes(),
                     "u_map_ibl_alpha": np.array([equivalent_alpha(m) for m in lobes], np.float32).tobytes(), **maps}
+        zeros = material.affine_zeros() if hasattr(material, "affine_zeros") else None
+        for j, zero in enumerate(zeros or ()):  # mapped affine colours: the curves at 0 (maps.Mapped._affine_ibl)
+            maps[f"u_map_ibl_zero{j}"] = cached_specular_albedo(zero).astype(np.float32).tobytes()
         return {
             "u_ibl_albedo": cached_specular_albedo(material).astype(np.float32).tobytes(),
             "u_ibl_diffuse": tuple(float(c) for c in material.lambertian_split()[0]),

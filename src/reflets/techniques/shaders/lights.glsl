@@ -46,7 +46,7 @@ vec3 image_based_lighting(vec3 x, mat3 frame, vec3 wo) {
     // mapped colours (reflets/brdf/maps.py), a translucent albedo map: the albedos × texels, except the share of an
     // interface the map does not tint (a translucent material's reflection: u_ibl_untinted)
     vec3 untinted = mix(u_ibl_untinted[k0], u_ibl_untinted[k1], clamp(node - float(k0), 0.0, 1.0));
-    material_ibl_scale(untinted, diffuse_albedo, albedo);
+    material_ibl_scale(dot(n, v), untinted, diffuse_albedo, albedo);
 #endif
 #endif
     vec3 diffuse = diffuse_albedo * INV_PI * texture(u_ibl_irradiance, equirect_uv(u_ibl_env_from_world * n)).rgb;

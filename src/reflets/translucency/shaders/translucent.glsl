@@ -22,7 +22,7 @@ void material_surface(vec4 uvs, inout mat3 frame) {
 }
 
 // the split sum's albedo: the interface's share as it is, the rest (the diffusion term's) tinted
-void material_ibl_scale(vec3 untinted, inout vec3 diffuse_albedo, inout vec3 albedo) {
+void material_ibl_scale(float mu, vec3 untinted, inout vec3 diffuse_albedo, inout vec3 albedo) {
     diffuse_albedo *= g_albedo;
     albedo = untinted + max(albedo - untinted, vec3(0.0)) * g_albedo;
 }
