@@ -62,13 +62,14 @@ def test_a_cut_out_or_blended_glTF_base_is_refused_in_one_line():
                                "mesh": [{"shape": "plane", "material": "s"}], "light": [light]})  # fmt: skip
 
 
+@pytest.mark.parametrize("affine", [False, True])
 @pytest.mark.parametrize("environment", [False, True])
-def test_scratches_over_a_library_base_with_maps(environment, tmp_path):
-    """A library base with a colour map, a mapped exponent, a normal map and emission, under a point light or the
-    studio map: with no scratch the scratches pass is the forward pass of the base (under the map too: the pass lights
-    the base by the base's own split sum); scratched, forward by name shows the finite part, the base × w̄_b (its
-    per-fragment split sum weighted in the twin); the reference's finite part is the mapped base × its uncovered
-    share."""
+def test_scratches_over_a_library_base_with_maps(environment, affine, tmp_path):
+    """A library base with a colour map, a mapped exponent (or two affine colours), a normal map and emission, under a
+    point light or the studio map: with no scratch the scratches pass is the forward pass of the base (under the map
+    too: the pass lights the base by the base's own split sum); scratched, forward by name shows the finite part, the
+    base × w̄_b (its per-fragment split sum weighted in the twin); the reference's finite part is the mapped base × its
+    uncovered share."""
     import warnings
 
     from reflets.bench.maps import UV_GRID, write_bumps
@@ -78,6 +79,10 @@ def test_scratches_over_a_library_base_with_maps(environment, tmp_path):
     base = {"type": "phong", "kd": {"texture": str(UV_GRID), "factor": [0.6, 0.6, 0.6]}, "ks": [0.3, 0.3, 0.3],
             "exponent": {"texture": str(UV_GRID), "factor": 60}, "normalized": True, "normal_map": {"texture": bumps},
             "emission": [0.05, 0.02, 0.0]}  # fmt: skip
+    if affine:  # colours the split sum interpolates between curves at 0 (weighted like the finite part by name)
+        base = {"type": "ashikhmin_shirley", "rs": {"texture": str(UV_GRID), "factor": [0.3, 0.3, 0.3]},
+                "rd": {"texture": str(UV_GRID), "factor": [0.6, 0.6, 0.6]}, "nu": 100, "nv": 100,
+                "normal_map": {"texture": bumps}, "emission": [0.05, 0.02, 0.0]}  # fmt: skip
     light = {"type": "environment", "file": str(default_environment())} if environment else POINT
 
     def scene(coverage, material=base):

@@ -285,6 +285,13 @@ class Scratched(Oriented, Material):
         nodes = getattr(self.base, "lobe_nodes", None)
         return nodes() if nodes is not None else None
 
+    def affine_zeros(self):
+        """The finite part with its base's mapped affine colours at 0 (``maps.Mapped.affine_zeros``): curves weighted
+        like the finite part's own, which the base's ``material_ibl_scale`` mixes with."""
+        zeros = getattr(self.base, "affine_zeros", None)
+        zeros = zeros() if zeros is not None else None
+        return None if zeros is None else [self.model_copy(update={"base": zero}) for zero in zeros]
+
     def lambertian_split(self):
         """The finite part's Lambertian albedo (the base's × its share) and the rest: a method that integrates the
         Lambertian part exactly — the environment's irradiance — does so for the base's."""
