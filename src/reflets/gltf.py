@@ -270,6 +270,8 @@ def _mapped_colours(name: str, source, exported: dict, textures: _Textures) -> l
     notes: list[str] = []
     conductor = source.type == "microfacet" and source.fresnel == "conductor"
     specular = exported.get("extensions", {}).get(SPECULAR)
+    # the colour material_to_gltf writes as KHR_materials_specular's tint (a Phong ks, an Ashikhmin-Shirley rs…)
+    tint = next((f for f in ("ks", "rs", "specular") if f in type(source).model_fields), None)
     emission = getattr(source, "emission", None)
     if emission is not None:
         strength = max(1.0, float(max(emission)))
@@ -286,10 +288,10 @@ def _mapped_colours(name: str, source, exported: dict, textures: _Textures) -> l
             exported["emissiveTexture"] = textures.info(ref, True, where, notes)
         elif mapped and field == ("specular" if conductor else source.lambertian_field):
             exported["pbrMetallicRoughness"]["baseColorTexture"] = textures.info(ref, True, where, notes)
-        elif mapped and field == source.linear_specular and specular is not None and not conductor:
+        elif mapped and field == tint and specular is not None and not conductor:
             specular["specularColorTexture"] = textures.info(ref, True, where, notes)
         else:
-            notes.append(f"{where}: its texture has no glTF slot in this export (its factor is written alone)")
+            notes.append(f"{where}: its texture has no glTF slot in this export (not written)")
     return notes
 
 

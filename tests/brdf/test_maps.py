@@ -170,7 +170,7 @@ def test_a_map_on_the_second_uv_set_exports_that_set_and_a_translucent_albedo_ma
     document = pygltflib.GLTF2.load(str(path))
     assert document.materials[0].pbrMetallicRoughness.baseColorTexture.texCoord == 1
     assert document.meshes[0].primitives[0].attributes.TEXCOORD_1 is not None
-    assert "t.albedo_texture: its texture has no glTF slot in this export (its factor is written alone)" in notes
+    assert "t.albedo_texture: its texture has no glTF slot in this export (not written)" in notes
 
 
 # ----------------------------------------------------------------------------- normal map, emission, occlusion
@@ -307,3 +307,17 @@ def test_mapped_affine_colours_under_lights_and_the_environment_as_the_reference
     studio = [{"type": "environment", "file": str(default_environment())}]
     assert error(affine_maps_scene(studio)) < min(1.2 * error(affine_maps_scene(studio, maps=False)), 0.04)
     # measured 2.9e-2 mapped, 4.3e-2 with the factors
+
+
+def test_affine_colour_maps_are_exported_where_glTF_has_a_slot(tmp_path):
+    """Ashikhmin-Shirley's rs becomes KHR_materials_specular's tint (its factor and texture), a Schlick F₀ the same;
+    rd has no slot: said, not written."""
+    import pygltflib
+
+    from reflets.gltf import export_gltf
+
+    path, notes = export_gltf(affine_maps_scene([POINT], size=(32, 24)), tmp_path / "affine.glb")
+    materials = {m.name: m for m in pygltflib.GLTF2.load(str(path)).materials}
+    for name in ("metal", "ball"):
+        assert "specularColorTexture" in materials[name].extensions["KHR_materials_specular"]
+    assert "metal.maps.rd: its texture has no glTF slot in this export (not written)" in notes

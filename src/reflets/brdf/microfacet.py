@@ -347,6 +347,8 @@ class Microfacet(Oriented, Mapped):
     def _weights(self) -> list[float]:
         d = luminance(self.diffuse)
         s = luminance(self.fresnel_rgb(np.array(1.0)))
+        if self.fresnel == "schlick":  # F₀ + (1 − F₀)/21: its cosine-weighted mean (a zero F₀ still reflects)
+            s += (1.0 - s) / 21.0
         return [d, s] if d + s > 0 else [0.0, 1.0]
 
     def _sample_h(self, wo: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> np.ndarray:

@@ -43,8 +43,9 @@ vec3 image_based_lighting(vec3 x, mat3 frame, vec3 wo) {
     int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);
     vec3 albedo = mix(u_ibl_albedo[k0], u_ibl_albedo[k1], clamp(node - float(k0), 0.0, 1.0));
 #ifdef MATERIAL_IBL_SCALE
-    // mapped colours (reflets/brdf/maps.py), a translucent albedo map: the albedos × texels, except the share of an
-    // interface the map does not tint (a translucent material's reflection: u_ibl_untinted)
+    // mapped colours (reflets/brdf/maps.py), a translucent albedo map: the albedos × texels (mixed from the curves at
+    // 0 for an affine colour), except the share of an interface the map does not tint (a translucent material's
+    // reflection: u_ibl_untinted)
     vec3 untinted = mix(u_ibl_untinted[k0], u_ibl_untinted[k1], clamp(node - float(k0), 0.0, 1.0));
     material_ibl_scale(dot(n, v), untinted, diffuse_albedo, albedo);
 #endif
