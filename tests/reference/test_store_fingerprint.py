@@ -46,3 +46,22 @@ def test_the_stored_benchmark_references_still_match_their_scenes():
     for scene, name, spp, seed in cases:
         digest, _ = store.fingerprint(scene, spp=spp, seed=seed)
         assert store.load(folder / name, digest) is not None, name
+
+
+def test_a_texture_nested_in_a_material_is_fingerprinted_by_content(tmp_path):
+    """A scratched material's base texture edited in place (same path) makes a new fingerprint, as a top-level one."""
+    from PIL import Image
+
+    def scene():
+        return reflets.load_dict({
+            "camera": {"position": [0, 1, 2], "look_at": [0, 0, 0], "size": [16, 12]},
+            "materials": {"s": {"type": "scratched", "coverage": 0.1, "alpha_size": 16, "table_size": 32,
+                                "base": {"type": "lambert", "albedo": {"texture": str(tmp_path / "a.png")}}}},
+            "mesh": [{"shape": "plane", "material": "s"}],
+            "light": [{"type": "point", "position": [0, 1, 0], "intensity": [1, 1, 1]}],
+        })  # fmt: skip
+
+    Image.new("RGB", (4, 4), (200, 10, 10)).save(tmp_path / "a.png")
+    before = fingerprint(scene())[0]
+    Image.new("RGB", (4, 4), (10, 200, 10)).save(tmp_path / "a.png")
+    assert fingerprint(scene())[0] != before

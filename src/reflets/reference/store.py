@@ -29,11 +29,19 @@ def fingerprint(scene, **params) -> tuple[str, dict]:
         if mesh.get("file"):
             mesh["file"] = {"name": Path(mesh["file"]).name, "sha256": file_digest(mesh["file"])}
     for material in description.get("materials", {}).values():
-        for value in [*material.values(), *(material.get("maps") or {}).values()]:  # textures by content, like meshes
-            if isinstance(value, dict) and value.get("texture"):
-                value["texture"] = {"name": Path(value["texture"]).name, "sha256": file_digest(value["texture"])}
+        _textures_by_content(material)
     description = {"scene": description, "version": REFERENCE_VERSION, **params}
     return _digest(description), description
+
+
+def _textures_by_content(node: dict) -> None:
+    """Every texture a material dict names — its own, its ``maps``', a nested material's (a scratched one's base) —
+    keyed by its content, like meshes: an image edited in place makes a new reference."""
+    for value in node.values():
+        if isinstance(value, dict) and value.get("texture") and not isinstance(value["texture"], dict):
+            value["texture"] = {"name": Path(value["texture"]).name, "sha256": file_digest(value["texture"])}
+        elif isinstance(value, dict):
+            _textures_by_content(value)
 
 
 #: scene keys that do not change the image (the gallery's caption)

@@ -262,6 +262,11 @@ class Scratched(Oriented, Material):
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         return self.base_weight() * self.base.eval(wo, wi)
 
+    def constant_dump(self) -> dict:
+        """As the base class, with the base's own constant dump (its maps left out: per-material integrals — albedo
+        curves, LTC fits — do not depend on the textures)."""
+        return {**super().constant_dump(), "base": self.base.constant_dump()}
+
     @property
     def brdf_source(self) -> str:
         """The base's own twin (a library base's maps and hooks, glTF's material_surface) with its brdf_eval (and
