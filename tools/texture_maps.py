@@ -15,18 +15,20 @@ measure them.
 from __future__ import annotations
 
 import tempfile
+from functools import partial
 
 import reflets
-from reflets.bench.assets import block_means as blocks
 from reflets.bench.maps import (
     MARBLE_POINT,
     MARBLE_QUAD,
     POINT,
     QUAD,
     affine_maps_scene,
+    block_error,
     lobe_maps_scene,
     mapped_scene,
     other_lobe_maps_scene,
+    reference_image,
     striped_marble,
     surface_maps_scene,
     unmapped,
@@ -35,51 +37,36 @@ from reflets.metrics import relmse
 from reflets.scene.assets import default_environment
 
 ENV = {"type": "environment", "file": str(default_environment())}
+BOTH = {"point + quad": [POINT, QUAD], "studio map": [ENV]}
 
 
-def reference(scene, **kw):
-    return reflets.reference(scene, progress=False, **kw).image
+def compare(kind: str, make, lighting: dict) -> None:
+    """For each lighting: the mapped scene and the factors alone each against its own reference, and the factors
+    alone against the mapped reference (how much the maps change the image). ``make(lights, maps=…)``."""
+    for name, lights in lighting.items():
+        mapped, factors = make(lights, maps=True), make(lights, maps=False)
+        ref = reference_image(mapped)
+        print(f"library {kind}, {name}, mapped: {block_error(mapped, ref):.2e}")
+        print(f"library {kind}, {name}, unmapped: {block_error(factors):.2e}")
+        print(f"library {kind}, {name}, the maps left out, against the mapped reference: "
+              f"{block_error(factors, ref):.2e}")  # fmt: skip
 
 
 def main() -> None:
-    for name, lights in (("point + quad", [POINT, QUAD]), ("studio map", [ENV])):
-        for label, scene in (("mapped", mapped_scene(lights)), ("unmapped", unmapped(mapped_scene(lights)))):
-            error = relmse(blocks(reflets.render(scene, spp=16)), blocks(reference(scene, spp=32, pixel="box")))
-            print(f"library materials, {name}, {label}: {error:.2e}")
+    compare("materials", lambda lights, maps: mapped_scene(lights) if maps else unmapped(mapped_scene(lights)), BOTH)
     with tempfile.TemporaryDirectory() as directory:
-        both = {"point + quad": [POINT, QUAD], "studio map": [ENV]}
-        for kind, make, lighting in (("lobe shapes", lobe_maps_scene, both),
-                                     ("normal maps + emission", surface_maps_scene, {"point + quad": [POINT, QUAD]})):
-            for name, lights in lighting.items():
-                refs = {}
-                for mapped in (True, False):
-                    scene = make(directory, lights, maps=mapped)
-                    refs[mapped] = ref = reference(scene, spp=32, pixel="box")
-                    image = blocks(reflets.render(scene, spp=16))
-                    print(f"library {kind}, {name}, {'mapped' if mapped else 'unmapped'}: "
-                          f"{relmse(image, blocks(ref)):.2e}")  # fmt: skip
-                print(f"library {kind}, {name}, the maps left out, against the mapped reference: "
-                      f"{relmse(image, blocks(refs[True])):.2e}")  # fmt: skip
-        scene = other_lobe_maps_scene(directory, [POINT, QUAD])
-        error = relmse(blocks(reflets.render(scene, spp=16)), blocks(reference(scene, spp=32, pixel="box")))
+        compare("lobe shapes", partial(lobe_maps_scene, directory), BOTH)
+        compare("normal maps + emission", partial(surface_maps_scene, directory), {"point + quad": [POINT, QUAD]})
+        error = block_error(other_lobe_maps_scene(directory, [POINT, QUAD]))
         print(f"library lobe shapes (Blinn-Phong, Ward, Ashikhmin-Shirley), point + quad, mapped: {error:.2e}")
-        for name, lights in (("point + quad", [POINT, QUAD]), ("studio map", [ENV])):
-            refs = {}
-            for mapped in (True, False):
-                scene = affine_maps_scene(lights, maps=mapped)
-                refs[mapped] = reference(scene, spp=32, pixel="box")
-                image = blocks(reflets.render(scene, spp=16))
-                print(f"library affine colours, {name}, {'mapped' if mapped else 'unmapped'}: "
-                      f"{relmse(image, blocks(refs[mapped])):.2e}")  # fmt: skip
-            print(f"library affine colours, {name}, the maps left out, against the mapped reference: "
-                  f"{relmse(image, blocks(refs[True])):.2e}")  # fmt: skip
+        compare("affine colours", affine_maps_scene, BOTH)
         for name, light, roughness, engine in (("quad", MARBLE_QUAD, 0.0, "numpy"), ("studio map", ENV, 0.3, "numpy"),
                                                ("point", MARBLE_POINT, 0.0, "volumetric")):  # fmt: skip
             for mapped in (True, False):
                 scene = striped_marble(directory, light, mapped=mapped, roughness=roughness)
-                ref = reference(scene, spp=16, engine="volumetric", workers=2) if engine == "volumetric" \
-                    else reference(scene, spp=64)  # fmt: skip
-                error = relmse(reflets.render(scene, spp=16), ref)
+                ref = reflets.reference(scene, spp=16, engine="volumetric", workers=2, progress=False) \
+                    if engine == "volumetric" else reflets.reference(scene, spp=64, progress=False)  # fmt: skip
+                error = relmse(reflets.render(scene, spp=16), ref.image)
                 print(f"marble, {name} ({engine} reference), {'mapped' if mapped else 'unmapped'}: {error:.2e}")
 
 

@@ -195,6 +195,12 @@ def _alphas(material) -> tuple[float, float] | None:
     return None
 
 
+def _specular_tint_field(source) -> str | None:
+    """The colour of a library model written as KHR_materials_specular's tint (a Phong ks, an Ashikhmin-Shirley rs, a
+    microfacet specular), if it has one."""
+    return next((f for f in ("ks", "rs", "specular") if f in type(source).model_fields), None)
+
+
 def material_to_gltf(name: str, material) -> tuple[dict, list[str]]:
     """A glTF material dict (pbrMetallicRoughness and extensions) and the approximations it makes."""
     from .fresnel import fresnel_conductor
@@ -228,7 +234,8 @@ def material_to_gltf(name: str, material) -> tuple[dict, list[str]]:
         lambert, _ = source.lambertian_split()
         base = list(lambert)
         roughness = math.sqrt(equivalent_alpha(source))
-        specular = next((getattr(source, f) for f in ("ks", "rs", "specular") if hasattr(source, f)), None)
+        tint = _specular_tint_field(source)
+        specular = getattr(source, tint) if tint is not None else None
         if specular is not None:
             extensions[SPECULAR] = {"specularFactor": 1.0, "specularColorFactor": [float(c) for c in specular]}
         if _alphas(source) is None:
@@ -270,8 +277,7 @@ def _mapped_colours(name: str, source, exported: dict, textures: _Textures) -> l
     notes: list[str] = []
     conductor = source.type == "microfacet" and source.fresnel == "conductor"
     specular = exported.get("extensions", {}).get(SPECULAR)
-    # the colour material_to_gltf writes as KHR_materials_specular's tint (a Phong ks, an Ashikhmin-Shirley rs…)
-    tint = next((f for f in ("ks", "rs", "specular") if f in type(source).model_fields), None)
+    tint = _specular_tint_field(source)
     emission = getattr(source, "emission", None)
     if emission is not None:
         strength = max(1.0, float(max(emission)))

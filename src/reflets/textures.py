@@ -90,6 +90,10 @@ class TextureRef(BaseModel):
         flip = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 1.0], [0.0, 0.0, 1.0]])
         return (self.transform.matrix() if self.transform is not None else np.eye(3)) @ flip
 
+    def uv_uniform(self) -> bytes:
+        """:meth:`uv_matrix` as a GLSL mat3 uniform's bytes (float32, column-major)."""
+        return self.uv_matrix().T.astype(np.float32).tobytes()
+
 
 #: bytes of decoded textures kept in memory (a 2048² map holds 16 MB of codes and 64 MB of float texels), least
 #: recently used out

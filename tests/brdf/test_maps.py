@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from brdf_helpers import upper_hemisphere
 
 import reflets
 from reflets.bench import maps
@@ -13,9 +14,11 @@ from reflets.bench.maps import (
     POINT,
     QUAD,
     affine_maps_scene,
+    block_error,
     lobe_maps_scene,
     mapped_scene,
     other_lobe_maps_scene,
+    reference_image,
     surface_maps_scene,
     unmapped,
 )
@@ -59,11 +62,7 @@ def test_at_evaluates_each_point_with_its_own_colour(name, field, fields, rng):
     material = MATERIALS[name](**{**fields, field: {"texture": UV_GRID, "factor": factor}})
     n = 64
     uv = rng.random((n, 2))
-    wo = rng.normal(size=(n, 3))
-    wi = rng.normal(size=(n, 3))
-    wo[:, 2], wi[:, 2] = np.abs(wo[:, 2]), np.abs(wi[:, 2])
-    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
-    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    wo, wi = upper_hemisphere(rng, n), upper_hemisphere(rng, n)
     colours = np.asarray(factor) * material.texels(field, uv)
     assert np.ptp(colours, axis=0).min() > 0.1  # the texture varies in every channel
     expected = np.array([
@@ -115,10 +114,9 @@ def test_mapped_colours_under_a_point_and_a_quad_light_as_the_reference():
     """Forward (the quad light's midpoint samples) with the texels read before brdf_eval, against the reference's
     per-hit colours; shadows on."""
     scene = mapped_scene([POINT, QUAD])
-    image = reflets.render(scene, spp=16)
-    ref = reflets.reference(scene, spp=32, pixel="box", progress=False).image
-    assert relmse(blocks(image), blocks(ref)) < 1.5e-3  # measured 2.9e-4 (the reference's 32 spp of noise)
-    assert relmse(blocks(reflets.render(unmapped(scene), spp=16)), blocks(ref)) > 1.0  # the maps matter: 24
+    ref = reference_image(scene)
+    assert block_error(scene, ref) < 1.5e-3  # measured 2.9e-4 (the reference's 32 spp of noise)
+    assert block_error(unmapped(scene), ref) > 1.0  # the maps matter: 24
 
 
 def test_mapped_colours_under_the_environment_add_no_error_to_the_split_sums(ctx):
@@ -127,12 +125,7 @@ def test_mapped_colours_under_the_environment_add_no_error_to_the_split_sums(ctx
     from reflets.scene.assets import default_environment
 
     scene = mapped_scene([{"type": "environment", "file": str(default_environment())}])
-    mapped = relmse(blocks(reflets.render(scene, spp=16)),
-                    blocks(reflets.reference(scene, spp=32, pixel="box", progress=False).image))  # fmt: skip
-    plain = unmapped(scene)
-    baseline = relmse(blocks(reflets.render(plain, spp=16)),
-                      blocks(reflets.reference(plain, spp=32, pixel="box", progress=False).image))  # fmt: skip
-    assert mapped < min(1.2 * baseline, 0.03)  # measured 7.5e-3 mapped, 1.3e-2 unmapped
+    assert block_error(scene) < min(1.2 * block_error(unmapped(scene)), 0.03)  # measured 7.5e-3, 1.3e-2 unmapped
 
 
 def test_mapped_colours_are_exported_in_their_gltf_slots(tmp_path):
@@ -180,10 +173,9 @@ def test_normal_maps_and_emission_under_a_point_and_a_quad_light_as_the_referenc
     """A bumpy Lambert floor and Phong ball (the frame turned by the map in both renderers) and a ball whose emission
     is the uv grid, against the reference (shadows on); the same without the normal maps is far from it."""
     scene = surface_maps_scene(tmp_path, [POINT, QUAD])
-    ref = reflets.reference(scene, spp=32, pixel="box", progress=False).image
-    assert relmse(blocks(reflets.render(scene, spp=16)), blocks(ref)) < 5e-3  # measured 1.1e-3
-    flat = reflets.render(surface_maps_scene(tmp_path, [POINT, QUAD], maps=False), spp=16)
-    assert relmse(blocks(flat), blocks(ref)) > 0.03  # the normal maps matter: 0.086
+    ref = reference_image(scene)
+    assert block_error(scene, ref) < 5e-3  # measured 1.1e-3
+    assert block_error(surface_maps_scene(tmp_path, [POINT, QUAD], maps=False), ref) > 0.03  # normal maps: 0.086
     lamp = scene.model_copy(update={"light": [], "mesh": scene.mesh[2:]})  # the emission alone, in both renderers
     image, ref = reflets.render(lamp, spp=16), reflets.reference(lamp, spp=16, pixel="box", progress=False).image
     assert image.max() > 0.5 and relmse(blocks(image), blocks(ref)) < 2e-3  # measured 3.3e-4
@@ -246,10 +238,7 @@ def test_at_evaluates_each_point_with_its_own_lobe(name, field, fields, rng):
     material = MATERIALS[name](**fields)
     n = 64
     uv = rng.random((n, 2))
-    wo, wi = rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
-    wo[:, 2], wi[:, 2] = np.abs(wo[:, 2]), np.abs(wi[:, 2])
-    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
-    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    wo, wi = upper_hemisphere(rng, n), upper_hemisphere(rng, n)
     values = material.lobe_values(field, material.texels(field, uv)[:, 0])
     constant = {k: v for k, v in fields.items() if k != field}
     expected = np.array([
@@ -269,26 +258,19 @@ def test_mapped_lobe_shapes_under_lights_and_the_environment_as_the_reference(tm
     from it than the same scene with the factors alone from its own reference."""
     from reflets.scene.assets import default_environment
 
-    def error(scene):
-        return relmse(blocks(reflets.render(scene, spp=16)),
-                      blocks(reflets.reference(scene, spp=32, pixel="box", progress=False).image))  # fmt: skip
-
-    scene = lobe_maps_scene(tmp_path, [POINT, QUAD])
-    ref = reflets.reference(scene, spp=32, pixel="box", progress=False).image
-    assert relmse(blocks(reflets.render(scene, spp=16)), blocks(ref)) < 1e-3  # measured 9.1e-5
-    factors = reflets.render(lobe_maps_scene(tmp_path, [POINT, QUAD], maps=False), spp=16)
-    assert relmse(blocks(factors), blocks(ref)) > 0.01  # the maps matter: 0.033
+    ref = reference_image(lobe_maps_scene(tmp_path, [POINT, QUAD]))
+    assert block_error(lobe_maps_scene(tmp_path, [POINT, QUAD]), ref) < 5e-4  # measured 9.1e-5
+    assert block_error(lobe_maps_scene(tmp_path, [POINT, QUAD], maps=False), ref) > 0.01  # the maps matter: 0.033
     studio = [{"type": "environment", "file": str(default_environment())}]
-    mapped, plain = error(lobe_maps_scene(tmp_path, studio)), error(lobe_maps_scene(tmp_path, studio, maps=False))
-    assert mapped < min(1.3 * plain, 0.03)  # measured 1.44e-2 mapped, 1.35e-2 with the factors
+    mapped = block_error(lobe_maps_scene(tmp_path, studio))
+    assert mapped < min(1.3 * block_error(lobe_maps_scene(tmp_path, studio, maps=False)), 0.03)
+    # measured 1.44e-2 mapped, 1.35e-2 with the factors
 
 
 def test_the_other_mapped_lobe_shapes_recompute_what_their_twins_derive(tmp_path):
     """Blinn-Phong's exponent (its normalisation), Ward's α (1/α and 1/(π α_x α_y)) and Ashikhmin-Shirley's
     exponents (their normalisation), each recomputed per fragment from the mapped value: as the reference."""
-    scene = other_lobe_maps_scene(tmp_path, [POINT, QUAD])
-    ref = reflets.reference(scene, spp=32, pixel="box", progress=False).image
-    assert relmse(blocks(reflets.render(scene, spp=16)), blocks(ref)) < 1e-3  # measured 1.7e-4
+    assert block_error(other_lobe_maps_scene(tmp_path, [POINT, QUAD])) < 1e-3  # measured 1.7e-4
 
 
 def test_mapped_affine_colours_under_lights_and_the_environment_as_the_reference():
@@ -297,15 +279,11 @@ def test_mapped_affine_colours_under_lights_and_the_environment_as_the_reference
     affine colour, bilinear for two) no further from it than the factors alone from their own reference."""
     from reflets.scene.assets import default_environment
 
-    def error(scene, reference_of=None):
-        ref = reflets.reference(reference_of or scene, spp=32, pixel="box", progress=False).image
-        return relmse(blocks(reflets.render(scene, spp=16)), blocks(ref))
-
-    lit = affine_maps_scene([POINT, QUAD])
-    assert error(lit) < 1e-3  # measured 9.9e-5
-    assert error(affine_maps_scene([POINT, QUAD], maps=False), lit) > 0.5  # the maps matter: 1.7
+    ref = reference_image(affine_maps_scene([POINT, QUAD]))  # (computed once, for both comparisons)
+    assert block_error(affine_maps_scene([POINT, QUAD]), ref) < 5e-4  # measured 9.9e-5
+    assert block_error(affine_maps_scene([POINT, QUAD], maps=False), ref) > 0.5  # the maps matter: 1.7
     studio = [{"type": "environment", "file": str(default_environment())}]
-    assert error(affine_maps_scene(studio)) < min(1.2 * error(affine_maps_scene(studio, maps=False)), 0.04)
+    assert block_error(affine_maps_scene(studio)) < min(1.2 * block_error(affine_maps_scene(studio, maps=False)), 0.04)
     # measured 2.9e-2 mapped, 4.3e-2 with the factors
 
 

@@ -13,7 +13,7 @@ def test_a_long_session_stays_within_a_budget():
     rows = soak(edits=160, block=16)
     first = max(r["rss_mb"] for r in rows[1 : len(rows) // 2 + 1])
     second = max(r["rss_mb"] for r in rows[len(rows) // 2 + 1 :])
-    assert second - first < 150, rows  # measured: +18 MB over 1,000 edits, blocks oscillating by ±70 MB
+    assert second - first < 150, rows  # `reflets bench soak`: +18 MB over 1,000 edits, blocks oscillating by ±70 MB
     assert all(r["programs"] <= programs.MAX_PROGRAMS for r in rows)
     assert all(r["gl_error"] == "GL_NO_ERROR" for r in rows)
     others = [r["gl_objects"] - r["programs"] for r in rows]  # every GL object but the cached programs

@@ -8,8 +8,12 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from ..api import render
+from ..metrics import relmse
+from ..reference import reference
 from ..scene.loaders import load_dict
 from ..scene.model import Scene
+from .assets import block_means
 
 #: a colourful uv grid (a Khronos sample's texture, shipped in the package data)
 UV_GRID = Path(__file__).parents[1] / "data" / "textures" / "uv_grid.png"
@@ -18,6 +22,18 @@ QUAD = {"type": "quad", "corners": [[-0.5, 2.2, 0.5], [0.5, 2.2, 0.5], [-0.5, 2.
 #: the marble's lights
 MARBLE_POINT = {"type": "point", "position": [1.5, 1.5, 2], "intensity": [6, 6, 6]}
 MARBLE_QUAD = {"type": "quad", "corners": [[-0.5, 1.6, 0.5], [0.5, 1.6, 0.5], [-0.5, 1.6, 1.5]], "radiance": [8, 8, 8]}
+
+
+def reference_image(scene: Scene) -> np.ndarray:
+    """The NumPy reference texture maps are measured against: 32 samples over each pixel's box."""
+    return reference(scene, spp=32, pixel="box", progress=False).image
+
+
+def block_error(scene: Scene, ref: np.ndarray | None = None) -> float:
+    """Relative MSE of the GPU image (16 spp) against ``ref`` (default: ``reference_image(scene)``) on 4 × 4-pixel
+    block means — how the tests and tools/texture_maps.py measure texture maps."""
+    ref = reference_image(scene) if ref is None else ref
+    return relmse(block_means(render(scene, spp=16)), block_means(ref))
 
 
 def mapped_scene(lights: list, size=(96, 72)) -> Scene:

@@ -182,6 +182,16 @@ class Material(BaseModel):
         whose albedo curve the prefiltered environment keeps apart (``material_ibl_scale``); None: all is tinted."""
         return None
 
+    def lobe_nodes(self) -> list[Material] | None:
+        """The material at the texel values its mapped lobe shape's split sum is computed at (``brdf.maps``);
+        None: no lobe shape varies."""
+        return None
+
+    def affine_zeros(self) -> list[Material] | None:
+        """The material with its mapped affine colours at 0, whose curves the split sum mixes with (``brdf.maps``);
+        None: no affine colour is mapped."""
+        return None
+
     #: the GLSL twin gives the split sum's albedos per fragment (``material_ibl``): no albedo curve is computed
     fragment_ibl: ClassVar[bool] = False
 
@@ -237,6 +247,12 @@ def register_material(cls: type[Material]) -> type[Material]:
 def upper(wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
     """Mask of direction pairs both strictly above the surface, shape (..., 1) for broadcasting."""
     return ((wo[..., 2] > 0) & (wi[..., 2] > 0))[..., None]
+
+
+def alpha_pair(alpha) -> tuple:
+    """(α_x, α_y) of an isotropic α or a pair — floats, or per-point arrays (``maps.Mapped.at``) kept as they are."""
+    pair = alpha if isinstance(alpha, tuple) else (alpha, alpha)
+    return tuple(a if isinstance(a, np.ndarray) else float(a) for a in pair)
 
 
 def normalize(v: np.ndarray) -> np.ndarray:

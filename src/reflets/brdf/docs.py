@@ -52,7 +52,8 @@ A colour the BRDF is linear in — the Lambertian albedo and the colour scaling 
 Ashikhmin–Shirley's `rs` and `rd`) may be read from an image, multiplied by a factor (the field's value; default 1), as
 glTF's factors and textures are (`reflets.brdf.maps`); so may the lobe shapes (the microfacet and Ward roughness
 `alpha`, the Phong and Blinn-Phong `exponent`, Ashikhmin–Shirley's `nu` / `nv`: factor × the texel's R); and every
-library material takes a normal map, an emission and an ambient occlusion map:
+library material but `measured` takes a normal map (not a mirror: its reflections are traced), an emission and an
+ambient occlusion map:
 
 ```toml
 [materials.wood]

@@ -688,7 +688,7 @@ class Gltf(Material):
         for field, sampler, _, _ in SLOTS:
             ref = getattr(self, field)
             if ref is not None:  # mat3 of mesh uv → image uv, column-major
-                values[sampler + "_uv"] = ref.uv_matrix().T.astype(np.float32).tobytes()
+                values[sampler + "_uv"] = ref.uv_uniform()
         return values
 
     def textures(self, ctx) -> dict[str, object]:

@@ -72,15 +72,16 @@ class LobeMap:
     """How a lobe-shape field reads its map: the value it is clamped to from below (``low``), which end of the
     texture's range makes the widest lobe (``widest``: "max" for a roughness, "min" for an exponent; the reference
     samples every point's lobe by that one), whether the model's NumPy eval takes per-point values as a column
-    (N, 1) rather than (N,), and the GLSL twin's uniforms the fragment recomputes: ``uniform`` (None where the twin
-    has no uniform of the field's own) becomes max(factor × t, low), each of ``derived`` (name, expression) its
+    (N, 1) rather than (N,), and the GLSL twin's uniforms the fragment recomputes: ``m_<field>`` (unless
+    ``own_uniform`` is False: the twin has none of the field's own) becomes max(factor × t, low), each of ``derived``
+    (name, expression) its
     expression — ``{factor}`` the uniform's own value, ``{t}`` the texel's R, and the twin's uniform names standing
     for the mapped values (assigned first)."""
 
     low: float
     widest: Literal["min", "max"]
     column: bool = False
-    uniform: str | None = ""  # "": m_<field>
+    own_uniform: bool = True
     derived: tuple[tuple[str, str], ...] = ()
 
 
@@ -172,15 +173,14 @@ class Mapped(Material):
                         f"{', '.join(allowed)} (the colours the BRDF is linear or affine in, the lobe shapes its "
                         'twin reads directly; normal_map and occlusion too; type = "gltf" maps the rest)'
                     )
-            affine = [key for key in maps if key in cls.affine_colours(data)]
-            if len(affine) > 2 or (affine and any(key in cls.lobe_maps for key in maps)):
-                raise ValueError(f"{', '.join(affine)} and {', '.join(k for k in maps if k in cls.lobe_maps) or 'more'}"
-                                 " cannot all be textures: the prefiltered environment interpolates at most two "
-                                 "affine colours, and not with a mapped lobe shape")  # fmt: skip
-            lobes = [TextureRef.model_validate(maps[key]) for key in maps if key in cls.lobe_maps]
+            affine = [key for key in maps if key in cls.affine_colours(data)]  # (two at most: A-S's rs and rd)
+            lobed = [key for key in maps if key in cls.lobe_maps]
+            if affine and lobed:
+                raise ValueError(f"{', '.join(affine)} and {', '.join(lobed)} cannot all be textures: the prefiltered "
+                                 "environment does not interpolate affine colours with a mapped lobe shape")
+            lobes = [TextureRef.model_validate(maps[key]) for key in lobed]
             if any(ref != lobes[0] for ref in lobes):  # the same file, uv, transform…
-                names = [key for key in maps if key in cls.lobe_maps]
-                raise ValueError(f"{' and '.join(names)} read different textures: mapped lobe shapes must read "
+                raise ValueError(f"{' and '.join(lobed)} read different textures: mapped lobe shapes must read "
                                  "the same one (the prefiltered environment interpolates its curves at one texel)")
             data["maps"] = maps
         if "emission" in maps and data.get("emission") is None:
@@ -354,11 +354,11 @@ class Mapped(Material):
                         "    local.xy *= m_normal_scale;",
                         "    frame = normal_mapped_frame(frame, local);"]  # fmt: skip
         affine = self.mapped_affine
-        scale = [f"    {albedo} *= t_map_{field};"
-                 for albedo, field in (("diffuse_albedo", self.lambertian_field), ("albedo", self.linear_specular))
-                 if field in maps and field not in affine]  # fmt: skip
-        lines += self._lobe_ibl(scale)
-        scale += self._affine_ibl(affine, lines)
+        diffuse, specular = ([f"    {albedo} *= t_map_{field};"] if field in maps and field not in affine else []
+                             for albedo, field in (("diffuse_albedo", self.lambertian_field),
+                                                   ("albedo", self.linear_specular)))  # fmt: skip
+        lines += self._lobe_ibl(specular)
+        scale = [*diffuse, *specular, *self._affine_ibl(affine, lines)]
         text = "\n".join([
             *lines,
             "#define MATERIAL_SURFACE 1",
@@ -391,10 +391,7 @@ class Mapped(Material):
         a = f"t_map_{affine[0]}"
         mixed = (f"    albedo = mix(z0, albedo, {a});" if count == 1 else
                  f"    albedo = mix(mix(z2, z1, {a}), mix(z0, albedo, {a}), t_map_{affine[1]});")  # fmt: skip
-        return ["#if defined(ENV_IBL) && ENV_IBL",
-                "    float node = clamp(mu, 0.0, 1.0) * float(IBL_NODES) - 0.5;",
-                "    int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);",
-                "    float fk = clamp(node - float(k0), 0.0, 1.0);",
+        return ["#if defined(ENV_IBL) && ENV_IBL", "    int k0, k1;", "    float fk;", "    ibl_nodes(mu, k0, k1, fk);",
                 *at, mixed, "#endif"]  # fmt: skip
 
     def _fragment_values(self) -> dict[str, tuple[str, str]]:
@@ -406,16 +403,16 @@ class Mapped(Material):
             if spec is None:
                 values[f"m_{field}"] = (field, "{factor} * {t}")
                 continue
-            if spec.uniform is not None:
-                values[spec.uniform or f"m_{field}"] = (field, f"max({{factor}} * {{t}}, {{kind}}({spec.low!r}))")
+            if spec.own_uniform:
+                values[f"m_{field}"] = (field, f"max({{factor}} * {{t}}, {{kind}}({spec.low!r}))")
             derived.update({name: (field, expression) for name, expression in spec.derived})
         return {**values, **derived}
 
-    def _lobe_ibl(self, scale: list[str]) -> list[str]:
+    def _lobe_ibl(self, specular_scale: list[str]) -> list[str]:
         """A mapped lobe shape's split sum (lights.glsl's MATERIAL_IBL): the albedo curves and equivalent roughness
         at ``LOBE_NODES`` texel values (``lobe_nodes``; ibl.py sets them) interpolated at the fragment's texel (in
-        √t, the nodes' spacing), the
-        mapped colours' texels on them as ``material_ibl_scale`` puts them; the diffuse albedo is the model's own."""
+        √t, the nodes' spacing), a mapped specular colour's texels on them (``specular_scale``); the diffuse albedo
+        is the model's own (its mapped value included)."""
         if not self.mapped_lobes:
             return []
         diffuse = f"m_{self.lambertian_field}" if self.lambertian_field else "vec3(0.0)"
@@ -428,16 +425,16 @@ class Mapped(Material):
             "void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 albedo, out float alpha) {",
             f"    float s = sqrt(clamp(t_map_{self.mapped_lobes[0]}, 0.0, 1.0)) * float(MAP_IBL_NODES - 1);",
             "    int j = min(int(s), MAP_IBL_NODES - 2);",
-            "    float node = clamp(mu, 0.0, 1.0) * float(IBL_NODES) - 0.5;",
-            "    int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);",
-            "    float fk = clamp(node - float(k0), 0.0, 1.0);",
+            "    int k0, k1;",
+            "    float fk;",
+            "    ibl_nodes(mu, k0, k1, fk);",
             "    int n0 = j * IBL_NODES, n1 = n0 + IBL_NODES;",
             "    vec3 a0 = mix(u_map_ibl_albedo[n0 + k0], u_map_ibl_albedo[n0 + k1], fk);",
             "    vec3 a1 = mix(u_map_ibl_albedo[n1 + k0], u_map_ibl_albedo[n1 + k1], fk);",
             "    albedo = mix(a0, a1, s - float(j));",
             "    alpha = mix(u_map_ibl_alpha[j], u_map_ibl_alpha[j + 1], s - float(j));",
             f"    diffuse_albedo = {diffuse};",
-            *[line for line in scale if "diffuse_albedo" not in line],
+            *specular_scale,
             "}",
             "#endif",
         ]  # fmt: skip
@@ -452,7 +449,7 @@ class Mapped(Material):
         refs = {f"m_map_{field}": ref for field, ref in (self.maps or {}).items()}
         refs.update({f"m_{field}": getattr(self, field) for field in SURFACE_MAPS if getattr(self, field) is not None})
         for sampler, ref in refs.items():
-            values[sampler + "_uv"] = ref.uv_matrix().T.astype(np.float32).tobytes()
+            values[sampler + "_uv"] = ref.uv_uniform()
         if self.emission is not None:
             values["m_emission"] = tuple(float(c) for c in self.emission)
         if self.normal_map is not None:

@@ -22,6 +22,7 @@ from .base import (
     RGB,
     Oriented,
     Reflectance,
+    alpha_pair,
     blinn_phong_exponent,
     finish_sample,
     luminance,
@@ -276,8 +277,7 @@ class Microfacet(Oriented, Mapped):
     @property
     def alpha_xy(self) -> tuple[float, float]:
         """(alpha_x, alpha_y) = (Mitsuba's alpha_u, alpha_v)."""
-        pair = self.alpha if isinstance(self.alpha, tuple) else (self.alpha, self.alpha)
-        return tuple(a if isinstance(a, np.ndarray) else float(a) for a in pair)  # arrays: per point (maps.Mapped.at)
+        return alpha_pair(self.alpha)
 
     @property
     def ndf(self) -> Distribution:

@@ -11,6 +11,7 @@ from .base import (
     HalfVectorLobeMixture,
     Oriented,
     Reflectance,
+    alpha_pair,
     blinn_phong_exponent,
     luminance,
     register_material,
@@ -65,7 +66,7 @@ class Ward(HalfVectorLobeMixture, Oriented, Mapped):
     specular_field: ClassVar[str] = "ks"
     linear_specular: ClassVar[str] = "ks"
     #: the twin reads 1/α and 1/(π α_x α_y): a mapped α = max(factor × t, 10⁻³) per axis gives both per fragment
-    lobe_maps: ClassVar[dict[str, LobeMap]] = {"alpha": LobeMap(low=1e-3, widest="max", uniform=None, derived=(
+    lobe_maps: ClassVar[dict[str, LobeMap]] = {"alpha": LobeMap(low=1e-3, widest="max", own_uniform=False, derived=(
         ("m_inv_alpha", "min({factor} / max({t}, 1e-30), vec2(1000.0))"),
         ("m_inv_alpha_area", "m_inv_alpha.x * m_inv_alpha.y * INV_PI"),
     ))}  # fmt: skip
@@ -77,8 +78,7 @@ class Ward(HalfVectorLobeMixture, Oriented, Mapped):
 
     @property
     def alpha_xy(self) -> tuple[float, float]:
-        pair = self.alpha if isinstance(self.alpha, tuple) else (self.alpha, self.alpha)
-        return tuple(a if isinstance(a, np.ndarray) else float(a) for a in pair)  # arrays: per point (maps.Mapped.at)
+        return alpha_pair(self.alpha)
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         wo = np.asarray(wo, dtype=np.float64)

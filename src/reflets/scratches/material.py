@@ -255,8 +255,11 @@ class Scratched(Oriented, Material):
         """w̄_b = mean over the α map of max(0, 1 − ᾱ): the base's share of the surface (the finite part)."""
         if self.coverage is not None:
             return max(0.0, 1.0 - self.layer_count * self.coverage)
-        total = self.alpha_maps().astype(np.float64).sum(axis=0)
-        return float(np.mean(np.maximum(0.0, 1.0 - total)))
+        key = alpha_key(self)
+        if key not in _BASE_WEIGHTS:  # (the reference asks at every hit: the maps' sum once per set of maps)
+            total = self.alpha_maps().astype(np.float64).sum(axis=0)
+            _BASE_WEIGHTS[key] = float(np.mean(np.maximum(0.0, 1.0 - total)))
+        return _BASE_WEIGHTS[key]
 
     # ------------------------------------------------------------------------------------------ evaluation
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
@@ -287,14 +290,12 @@ class Scratched(Oriented, Material):
     def lobe_nodes(self):
         """The base's mapped lobe at its nodes (``maps.Mapped.lobe_nodes``): the finite part's split sum weights the
         base's curves in its twin (scratched_finite.glsl)."""
-        nodes = getattr(self.base, "lobe_nodes", None)
-        return nodes() if nodes is not None else None
+        return self.base.lobe_nodes()
 
     def affine_zeros(self):
         """The finite part with its base's mapped affine colours at 0 (``maps.Mapped.affine_zeros``): curves weighted
         like the finite part's own, which the base's ``material_ibl_scale`` mixes with."""
-        zeros = getattr(self.base, "affine_zeros", None)
-        zeros = zeros() if zeros is not None else None
+        zeros = self.base.affine_zeros()
         return None if zeros is None else [self.model_copy(update={"base": zero}) for zero in zeros]
 
     def lambertian_split(self):
@@ -404,6 +405,10 @@ def cached_table(profile: str, fresnel: dict, size: int, rays: int, backend: str
     return TABLES.get(
         key, lambda: build_table(profile, **fresnel, size=size, rays=rays, backend=backend, ctx=ctx, names=names)
     )
+
+
+#: base_weight by alpha_key
+_BASE_WEIGHTS: dict[str, float] = {}
 
 
 def alpha_key(material: Scratched) -> str:

@@ -198,12 +198,12 @@ class PrefilteredEnvironment:
         if material.fragment_ibl:
             return maps
         untinted = material.ibl_interface
-        lobes = material.lobe_nodes() if hasattr(material, "lobe_nodes") else None
+        lobes = material.lobe_nodes()
         if lobes is not None:  # a mapped lobe shape: the curves at maps.lobe_node_texels (its MATERIAL_IBL reads them)
             curves = np.concatenate([cached_specular_albedo(m) for m in lobes])
             return {"u_map_ibl_albedo": curves.astype(np.float32).tobytes(),
                     "u_map_ibl_alpha": np.array([equivalent_alpha(m) for m in lobes], np.float32).tobytes(), **maps}
-        zeros = material.affine_zeros() if hasattr(material, "affine_zeros") else None
+        zeros = material.affine_zeros()
         for j, zero in enumerate(zeros or ()):  # mapped affine colours: the curves at 0 (maps.Mapped._affine_ibl)
             maps[f"u_map_ibl_zero{j}"] = cached_specular_albedo(zero).astype(np.float32).tobytes()
         return {

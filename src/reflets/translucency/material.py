@@ -204,7 +204,7 @@ class Translucent(Material):
             "m_diffuse": tuple(float(c) for c in self.diffuse_factor()),
         }
         if self.albedo_texture is not None:  # mat3 of mesh uv → image uv, column-major
-            values["m_albedo_map_uv"] = self.albedo_texture.uv_matrix().T.astype(np.float32).tobytes()
+            values["m_albedo_map_uv"] = self.albedo_texture.uv_uniform()
         return values
 
     def flags(self) -> dict[str, object]:

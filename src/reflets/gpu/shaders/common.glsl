@@ -26,6 +26,17 @@ mat3 normal_mapped_frame(mat3 frame, vec3 local) {
     return shading_frame(normalize(frame * local), vec4(frame[0], handedness));
 }
 
+#ifdef IBL_NODES
+// The two nodes of a split-sum albedo curve (IBL_NODES values at mu = (k + 1/2) / IBL_NODES) around mu, and the
+// weight of the second: every reader of such a curve (lights.glsl, a mapped material's twin: brdf/maps.py) uses it.
+void ibl_nodes(float mu, out int k0, out int k1, out float weight) {
+    float node = clamp(mu, 0.0, 1.0) * float(IBL_NODES) - 0.5;
+    k0 = clamp(int(floor(node)), 0, IBL_NODES - 1);
+    k1 = min(k0 + 1, IBL_NODES - 1);
+    weight = clamp(node - float(k0), 0.0, 1.0);
+}
+#endif
+
 // Equirectangular lookup coordinates, Mitsuba 3 envmap convention (row 0 = up, +y is up).
 vec2 equirect_uv(vec3 d) {
     float u = atan(d.x, -d.z) / TWO_PI;

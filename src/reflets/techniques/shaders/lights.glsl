@@ -39,14 +39,15 @@ vec3 image_based_lighting(vec3 x, mat3 frame, vec3 wo) {
 #else
     vec3 diffuse_albedo = u_ibl_diffuse;
     float alpha = u_ibl_alpha;
-    float node = clamp(dot(n, v), 0.0, 1.0) * float(IBL_NODES) - 0.5;
-    int k0 = clamp(int(floor(node)), 0, IBL_NODES - 1), k1 = min(k0 + 1, IBL_NODES - 1);
-    vec3 albedo = mix(u_ibl_albedo[k0], u_ibl_albedo[k1], clamp(node - float(k0), 0.0, 1.0));
+    int k0, k1;
+    float fk;
+    ibl_nodes(dot(n, v), k0, k1, fk);
+    vec3 albedo = mix(u_ibl_albedo[k0], u_ibl_albedo[k1], fk);
 #ifdef MATERIAL_IBL_SCALE
     // mapped colours (reflets/brdf/maps.py), a translucent albedo map: the albedos × texels (mixed from the curves at
     // 0 for an affine colour), except the share of an interface the map does not tint (a translucent material's
     // reflection: u_ibl_untinted)
-    vec3 untinted = mix(u_ibl_untinted[k0], u_ibl_untinted[k1], clamp(node - float(k0), 0.0, 1.0));
+    vec3 untinted = mix(u_ibl_untinted[k0], u_ibl_untinted[k1], fk);
     material_ibl_scale(dot(n, v), untinted, diffuse_albedo, albedo);
 #endif
 #endif
