@@ -1,9 +1,10 @@
 """Texture maps against the reference: library materials with mapped colours (a Lambert floor, a Phong ball with a
 diffuse map, a conductor with a specular map) under a point + a quad light and under the studio map; mapped lobe
 shapes (a conductor's roughness, a Phong exponent) under the same lights, and the others (Blinn-Phong, Ward,
-Ashikhmin-Shirley) under the point + quad; affine colours (a Schlick F₀, Ashikhmin-Shirley's rs and rd) under a
-point + a quad light and the studio map; normal maps and a mapped emission under a point + a quad light (and the
-maps left out against the mapped reference: how much they change the image); a striped translucent marble under a
+Ashikhmin-Shirley, Lafortune's lobe exponents) under the point + quad; affine colours (a Schlick F₀,
+Ashikhmin-Shirley's rs and rd, a Lafortune lobe's scale) under a point + a quad light and the studio map; normal
+maps and a mapped emission under a point + a quad light (and the maps left out against the mapped reference: how
+much they change the image); a striped translucent marble under a
 quad light, the studio map (rough interface) and a point light (against the volumetric reference) — each beside the
 same scene without its maps against its own reference (docs/assets.md). Relative MSE (reflets.metrics.relmse) on
 4 × 4-pixel block means for the library scenes (96 × 72), per pixel for the marble's frame (64 × 48), as the tests
@@ -32,6 +33,7 @@ from reflets.bench.maps import (
     striped_marble,
     surface_maps_scene,
     unmapped,
+    without_maps,
 )
 from reflets.metrics import relmse
 from reflets.scene.assets import default_environment
@@ -57,9 +59,16 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as directory:
         compare("lobe shapes", partial(lobe_maps_scene, directory), BOTH)
         compare("normal maps + emission", partial(surface_maps_scene, directory), {"point + quad": [POINT, QUAD]})
-        error = block_error(other_lobe_maps_scene(directory, [POINT, QUAD]))
-        print(f"library lobe shapes (Blinn-Phong, Ward, Ashikhmin-Shirley), point + quad, mapped: {error:.2e}")
+        scene = other_lobe_maps_scene(directory, [POINT, QUAD])
+        ref = reference_image(scene)
+        what = "library lobe shapes (Blinn-Phong, Ward, Ashikhmin-Shirley, Lafortune), point + quad"
+        print(f"{what}, mapped: {block_error(scene, ref):.2e}")
+        print(f"{what}, Lafortune's maps left out: {block_error(without_maps(scene), ref):.2e}")
         compare("affine colours", affine_maps_scene, BOTH)
+        for name, lights in BOTH.items():
+            scene = affine_maps_scene(lights)
+            error = block_error(without_maps(scene), reference_image(scene))
+            print(f"library affine colours, {name}, Lafortune's scale map left out: {error:.2e}")
         for name, light, roughness, engine in (("quad", MARBLE_QUAD, 0.0, "numpy"), ("studio map", ENV, 0.3, "numpy"),
                                                ("point", MARBLE_POINT, 0.0, "volumetric")):  # fmt: skip
             for mapped in (True, False):

@@ -268,14 +268,15 @@ def material_to_gltf(name: str, material) -> tuple[dict, list[str]]:
 
 def _mapped_colours(name: str, source, exported: dict, textures: _Textures) -> list[str]:
     """A library material's maps (``brdf.maps``) in glTF's slots: the mapped colour that became the base colour
-    (the Lambertian albedo; a conductor's specular tint) its baseColorTexture, the one that became
-    KHR_materials_specular's tint its specularColorTexture (both sRGB, as glTF defines them); the normal and
+    (the Lambertian albedo; a conductor's specular tint, a mirror's reflectance) its baseColorTexture, the one that
+    became KHR_materials_specular's tint its specularColorTexture (both sRGB, as glTF defines them); the normal and
     occlusion maps, the emission (its factor over 1 by KHR_materials_emissive_strength) and its map in theirs; a
     texture with no slot (a translucent albedo map) noted."""
     from .textures import texture_refs
 
     notes: list[str] = []
     conductor = source.type == "microfacet" and source.fresnel == "conductor"
+    base = "specular" if conductor else "reflectance" if source.type == "mirror" else source.lambertian_field
     specular = exported.get("extensions", {}).get(SPECULAR)
     tint = _specular_tint_field(source)
     emission = getattr(source, "emission", None)
@@ -292,7 +293,7 @@ def _mapped_colours(name: str, source, exported: dict, textures: _Textures) -> l
             exported["occlusionTexture"] = textures.info(ref, False, where, notes) | {"strength": ref.strength}
         elif mapped and field == "emission":
             exported["emissiveTexture"] = textures.info(ref, True, where, notes)
-        elif mapped and field == ("specular" if conductor else source.lambertian_field):
+        elif mapped and field == base:
             exported["pbrMetallicRoughness"]["baseColorTexture"] = textures.info(ref, True, where, notes)
         elif mapped and field == tint and specular is not None and not conductor:
             specular["specularColorTexture"] = textures.info(ref, True, where, notes)

@@ -21,6 +21,7 @@ from reflets.bench.maps import (
     reference_image,
     surface_maps_scene,
     unmapped,
+    without_maps,
 )
 from reflets.brdf import MATERIALS
 from reflets.brdf.maps import Mapped
@@ -35,6 +36,7 @@ MAPPED = {
     "microfacet": {"alpha": 0.3, "fresnel": "conductor", "diffuse": (0.2, 0.2, 0.2)},
     "ward": {"alpha": 0.2},
     "lafortune": {},
+    "mirror": {"diffuse": (0.05, 0.05, 0.05), "reflectance": (0.1, 0.1, 0.1)},
 }
 
 
@@ -75,6 +77,36 @@ def test_at_evaluates_each_point_with_its_own_colour(name, field, fields, rng):
     assert np.all(points.pdf(wo, wi)[points.eval(wo, wi).max(axis=-1) > 0] > 0)
 
 
+@pytest.mark.parametrize(("field", "spec"), [("scale", {"factor": (0.7, 0.5, 0.9)}), ("exponent", {"factor": 60})])
+def test_lafortune_lobes_take_maps_one_by_one(field, spec, rng):
+    """A Lafortune lobe's scale or exponent from a map (written inside the lobe, kept as ``maps.lobe1_<field>``):
+    ``at(uv)`` equals the model with each point's lobe as a constant, sampled where any point's BRDF is not zero; a
+    dump reads back the same material."""
+    lobes = [{"c": (-1.0, -1.0, 1.0), "exponent": 30}, {"c": (-0.5, -0.5, 0.8), "exponent": 5, "scale": (0.4,) * 3}]
+    lobes[1][field] = {"texture": UV_GRID, **spec}
+    material = MATERIALS["lafortune"](kd=(0.1, 0.1, 0.1), lobes=lobes)
+    assert list(material.maps) == [f"lobe1_{field}"] and material.lobes[1].model_dump()[field] == spec["factor"]
+    assert type(material).model_validate(material.model_dump()) == material
+    n = 64
+    uv = rng.random((n, 2))
+    wo, wi = upper_hemisphere(rng, n), upper_hemisphere(rng, n)
+    texels = material.texels(f"lobe1_{field}", uv)
+    values = np.asarray(spec["factor"]) * (texels if field == "scale" else texels[:, 0])
+    assert np.ptp(values, axis=0).min() > 0.1
+    expected = []
+    for i in range(n):
+        lobe = {**lobes[1], field: tuple(values[i]) if field == "scale" else float(values[i])}
+        constant = MATERIALS["lafortune"](kd=(0.1, 0.1, 0.1), lobes=[lobes[0], lobe])
+        expected.append(constant.eval(wo[i : i + 1], wi[i : i + 1])[0])
+    points = material.at(uv)
+    np.testing.assert_allclose(points.eval(wo, wi), np.array(expected), rtol=1e-12, atol=1e-15)
+    assert np.all(points.pdf(wo, wi)[points.eval(wo, wi).max(axis=-1) > 0] > 0)
+    nodes, zeros = material.lobe_nodes(), material.affine_zeros()
+    assert (nodes is None, zeros is None) == ((False, True) if field == "exponent" else (True, False))
+    if zeros:
+        assert zeros[0].lobes[1].scale == (0.0, 0.0, 0.0) and zeros[0].lobes[0] == material.lobes[0]
+
+
 def test_a_mapped_material_round_trips_through_its_dump():
     material = MATERIALS["phong"](kd={"texture": UV_GRID, "factor": [0.5, 0.5, 0.5], "transform": {"scale": [2, 2]}})
     assert material.kd == (0.5, 0.5, 0.5) and material.maps["kd"].transform.scale == (2.0, 2.0)
@@ -93,7 +125,15 @@ def test_a_mapped_material_round_trips_through_its_dump():
         ({"type": "lambert", "normal_map": {"texture": UV_GRID, "scale": float("nan")}}, "normal_map.scale"),
         ({"type": "lambert", "occlusion": {"texture": UV_GRID, "strength": 2}}, "occlusion.strength"),
         ({"type": "lambert", "emission": [-1, 0, 0]}, "materials.m.emission"),
-        ({"type": "mirror", "reflectance": {"texture": UV_GRID}}, "reflectance cannot be a texture"),
+        ({"type": "mirror", "fresnel": "conductor", "reflectance": {"texture": UV_GRID}},
+         "reflectance cannot be a texture"),
+        ({"type": "lafortune", "lobes": [{"c": {"texture": UV_GRID}}]}, "lobes[0].c cannot be a texture"),
+        ({"type": "lafortune", "lobes": [{"scale": {"texture": UV_GRID}, "exponent": {"texture": UV_GRID}}]},
+         "lobe0_scale and lobe0_exponent cannot all be textures"),
+        ({"type": "lafortune", "lobes": [{}, {}], "maps": {"lobe2_scale": {"texture": UV_GRID}}},
+         "lobe2_scale cannot be a texture"),
+        ({"type": "lafortune", "lobes": [{"scale": {"texture": UV_GRID}}, {"scale": {"texture": UV_GRID, "uv": 1}}]},
+         "the lobes' mapped scales read different textures"),
         ({"type": "ashikhmin_shirley", "rs": {"texture": UV_GRID}, "nu": {"texture": UV_GRID}},
          "rs and nu cannot all be textures"),
         ({"type": "lambert", "albedo": {"texture": "missing.png"}}, "materials.m.maps.albedo: texture not found"),
@@ -268,20 +308,29 @@ def test_mapped_lobe_shapes_under_lights_and_the_environment_as_the_reference(tm
 
 
 def test_the_other_mapped_lobe_shapes_recompute_what_their_twins_derive(tmp_path):
-    """Blinn-Phong's exponent (its normalisation), Ward's α (1/α and 1/(π α_x α_y)) and Ashikhmin-Shirley's
-    exponents (their normalisation), each recomputed per fragment from the mapped value: as the reference."""
-    assert block_error(other_lobe_maps_scene(tmp_path, [POINT, QUAD])) < 1e-3  # measured 1.7e-4
+    """Blinn-Phong's exponent (its normalisation), Ward's α (1/α and 1/(π α_x α_y)), Ashikhmin-Shirley's exponents
+    (their normalisation) and a Lafortune material's lobe exponents (array elements of its twin's uniforms), each
+    recomputed per fragment from the mapped value: as the reference."""
+    scene = other_lobe_maps_scene(tmp_path, [POINT, QUAD])
+    ref = reference_image(scene)
+    error = block_error(scene, ref)
+    assert error < 5e-4  # measured 1.7e-4
+    assert block_error(without_maps(scene), ref) > 2 * error  # Lafortune's exponent maps left out: 6.0e-4
 
 
 def test_mapped_affine_colours_under_lights_and_the_environment_as_the_reference():
-    """A Schlick F₀ and Ashikhmin-Shirley's rs and rd from maps: under a point + a quad light as the reference; under
-    the studio map (the albedo interpolated per channel between the curves at 0 and at the factors: exact for an
-    affine colour, bilinear for two) no further from it than the factors alone from their own reference."""
+    """A Schlick F₀, Ashikhmin-Shirley's rs and rd and a Lafortune lobe's scale from maps: under a point + a quad
+    light as the reference; under the studio map (the albedo interpolated per channel between the curves at 0 and at
+    the factors: exact for an affine colour, bilinear for two) no further from it than the factors alone from their
+    own reference."""
     from reflets.scene.assets import default_environment
 
-    ref = reference_image(affine_maps_scene([POINT, QUAD]))  # (computed once, for both comparisons)
-    assert block_error(affine_maps_scene([POINT, QUAD]), ref) < 5e-4  # measured 9.9e-5
+    scene = affine_maps_scene([POINT, QUAD])
+    ref = reference_image(scene)  # (computed once, for every comparison)
+    error = block_error(scene, ref)
+    assert error < 5e-4  # measured 9.9e-5
     assert block_error(affine_maps_scene([POINT, QUAD], maps=False), ref) > 0.5  # the maps matter: 1.7
+    assert block_error(without_maps(scene), ref) > 2 * error  # Lafortune's lobe scale map left out: 5.0e-4
     studio = [{"type": "environment", "file": str(default_environment())}]
     assert block_error(affine_maps_scene(studio)) < min(1.2 * block_error(affine_maps_scene(studio, maps=False)), 0.04)
     # measured 2.9e-2 mapped, 4.3e-2 with the factors

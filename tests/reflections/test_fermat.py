@@ -313,7 +313,8 @@ def test_a_planar_mirror_shows_a_scratched_plate_as_the_mirrored_camera_sees_it(
 
 def test_textured_objects_are_textured_in_the_mirror(ctx, tmp_path):
     """A glTF floor with a checker texture and a cut-out card, seen directly and in the chrome sphere: the reflected
-    objects read their textures (material_surface in reflected.frag), against the ray-traced reference."""
+    objects read their textures (material_surface in reflected.frag), against the ray-traced reference; the chrome's
+    own k (linear data) and diffuse colour are maps too, which the composite reads at each pixel's uv."""
     from PIL import Image
 
     checker = (np.indices((8, 8)).sum(axis=0) % 2 * 200 + 40).astype(np.uint8)
@@ -329,6 +330,10 @@ def test_textured_objects_are_textured_in_the_mirror(ctx, tmp_path):
                                  "base_color_texture": {"texture": str(tmp_path / "stripes.png"), "filter": "nearest"}}
     data["mesh"][1] = {"shape": "plane", "size": [1.2, 1.2], "material": "card",
                        "transform": {"rotate": [90, 35, 0], "translate": [-1.0, 0.7, 0.7]}}  # fmt: skip
+    bands = np.repeat(np.where(np.arange(6) % 2, 255, 40).astype(np.uint8), 8)[:, None, None] * np.ones((1, 8, 3))
+    Image.fromarray(bands.astype(np.uint8), "RGB").save(tmp_path / "bands.png")
+    data["materials"]["chrome"].update({"k": {"texture": str(tmp_path / "bands.png"), "factor": [3.3, 3.3, 3.1]},
+                                        "diffuse": {"texture": str(tmp_path / "checker.png"), "factor": [0.3] * 3}})
     textured = reflets.load_dict(data, base_dir=scenes_dir())
     size = (200, 150)
     image = reflets.render(textured, method="fermat", size=size)
@@ -339,6 +344,10 @@ def test_textured_objects_are_textured_in_the_mirror(ctx, tmp_path):
     on_sphere = np.linalg.norm(sphere - np.array([0.2, 0.7, -0.3]), axis=-1) < 0.71
     factors = {k: m.model_copy(update={"base_color_texture": None, "alpha_mode": "opaque"}) if m.type == "gltf" else m
                for k, m in textured.materials.items()}  # fmt: skip
+    mirror = factors["chrome"] = textured.materials["chrome"].model_copy(update={"maps": None})
     untextured = reflets.render(textured.model_copy(update={"materials": factors}), method="fermat", size=size)
     mse = lambda a, b: np.mean((a[on_sphere] - b[on_sphere]) ** 2)  # noqa: E731
     assert mse(untextured, image) > 10 * mse(image, ref.image)  # the mirror shows the textures
+    factors = {**textured.materials, "chrome": mirror}
+    unmapped = reflets.render(textured.model_copy(update={"materials": factors}), method="fermat", size=size)
+    assert mse(unmapped, image) > 10 * mse(image, ref.image)  # and its own maps

@@ -36,6 +36,12 @@ def block_error(scene: Scene, ref: np.ndarray | None = None) -> float:
     return relmse(block_means(render(scene, spp=16)), block_means(ref))
 
 
+def without_maps(scene: Scene, name: str = "back") -> Scene:
+    """The scene with one material's maps left out (its factors kept): how much they change the image."""
+    materials = {**scene.materials, name: scene.materials[name].model_copy(update={"maps": None})}
+    return scene.model_copy(update={"materials": materials})
+
+
 def mapped_scene(lights: list, size=(96, 72)) -> Scene:
     """A Lambert floor with its albedo mapped (tiled 3 × 3), a Phong ball with a diffuse map and a conductor with a
     specular map."""
@@ -127,15 +133,16 @@ def _bands(directory: str | Path) -> str:
 
 def _two_balls(materials: dict, lights: list, size) -> Scene:
     """Two balls (materials "ball", "metal") on a grey Lambert floor, and a small one in front (material "front")
-    when ``materials`` has it."""
-    front = [{"shape": "sphere", "radius": 0.25, "material": "front", "transform": {"translate": [0, 0.25, 0.9]}}]
+    and one behind ("back") when ``materials`` has them."""
+    extra = {name: {"shape": "sphere", "radius": radius, "material": name, "transform": {"translate": [0, radius, z]}}
+             for name, radius, z in (("front", 0.25, 0.9), ("back", 0.35, -0.9))}
     return load_dict({
         "camera": {"position": [0, 1.2, 3.2], "look_at": [0, 0.3, 0], "fov_y": 40, "size": list(size)},
         "materials": {"floor": {"type": "lambert", "albedo": [0.5, 0.5, 0.5]}, **materials},
         "mesh": [{"shape": "plane", "size": [4, 4], "material": "floor"},
                  {"shape": "sphere", "radius": 0.5, "material": "ball", "transform": {"translate": [-0.6, 0.5, 0]}},
                  {"shape": "sphere", "radius": 0.5, "material": "metal", "transform": {"translate": [0.6, 0.5, 0]}},
-                 *(front if "front" in materials else [])],
+                 *(mesh for name, mesh in extra.items() if name in materials)],
         "light": lights,
     })  # fmt: skip
 
@@ -155,7 +162,8 @@ def lobe_maps_scene(directory: str | Path, lights: list, size=(96, 72), maps: bo
 def other_lobe_maps_scene(directory: str | Path, lights: list, size=(96, 72)) -> Scene:
     """The other lobe shapes a map may give, on the bands: a Blinn-Phong ball's exponent (factor 300; its
     normalisation per fragment), an anisotropic Ward ball's α (factors [0.5, 0.15]; the twin's 1/α per fragment) and
-    a small Ashikhmin-Shirley ball's exponents (factors 400 and 40, one map; its normalisation per fragment)."""
+    a small Ashikhmin-Shirley ball's exponents (factors 400 and 40, one map; its normalisation per fragment), and a
+    Lafortune ball behind, the exponents of its two lobes (factors 60 and 8, one map)."""
     texture = _bands(directory)
     ball = {"type": "blinn_phong", "kd": [0.2, 0.3, 0.2], "ks": [0.5, 0.5, 0.5], "normalized": True,
             "exponent": {"texture": texture, "factor": 300}}  # fmt: skip
@@ -163,18 +171,26 @@ def other_lobe_maps_scene(directory: str | Path, lights: list, size=(96, 72)) ->
              "alpha": {"texture": texture, "factor": [0.5, 0.15]}}  # fmt: skip
     front = {"type": "ashikhmin_shirley", "rs": [0.05, 0.05, 0.05], "rd": [0.4, 0.3, 0.2],
              "nu": {"texture": texture, "factor": 400}, "nv": {"texture": texture, "factor": 40}}  # fmt: skip
-    return _two_balls({"ball": ball, "metal": metal, "front": front}, lights, size)
+    back = {"type": "lafortune", "kd": [0.2, 0.15, 0.1], "lobes": [
+        {"c": [-1, -1, 1], "scale": [0.6, 0.6, 0.6], "exponent": {"texture": texture, "factor": 60}},
+        {"c": [-0.6, -0.6, 0.9], "scale": [0.4, 0.3, 0.2], "exponent": {"texture": texture, "factor": 8}}]}
+    return _two_balls({"ball": ball, "metal": metal, "front": front, "back": back}, lights, size)
 
 
 def affine_maps_scene(lights: list, size=(96, 72), maps: bool = True) -> Scene:
-    """Colours a BRDF is affine in, from the uv grid: a GGX ball's Schlick F₀ (factor 0.6) and an Ashikhmin-Shirley
-    ball's rs (factor 0.3) and rd (factor 0.6, the grid tiled 2 × 2); ``maps`` False: the factors alone."""
+    """Colours a BRDF is affine in, from the uv grid: a GGX ball's Schlick F₀ (factor 0.6), an Ashikhmin-Shirley
+    ball's rs (factor 0.3) and rd (factor 0.6, the grid tiled 2 × 2), and behind, the scale of the first of a
+    Lafortune ball's two lobes (factor 0.8); ``maps`` False: the factors alone."""
     grid = str(UV_GRID)
     ball = {"type": "microfacet", "fresnel": "schlick", "alpha": 0.25, "diffuse": [0.2, 0.2, 0.2],
             "specular": [0.6, 0.6, 0.6]}  # fmt: skip
     metal = {"type": "ashikhmin_shirley", "rs": [0.3, 0.3, 0.3], "rd": [0.6, 0.6, 0.6], "nu": 200, "nv": 20}
+    back = {"type": "lafortune", "kd": [0.1, 0.1, 0.1], "lobes": [
+        {"c": [-1, -1, 1], "scale": [0.8, 0.8, 0.8], "exponent": 40},
+        {"c": [-0.6, -0.6, 0.9], "scale": [0.3, 0.3, 0.3], "exponent": 6}]}
     if maps:
+        back["lobes"][0]["scale"] = {"texture": grid, "factor": [0.8, 0.8, 0.8]}
         ball["specular"] = {"texture": grid, "factor": [0.6, 0.6, 0.6]}
         metal["rs"] = {"texture": grid, "factor": [0.3, 0.3, 0.3]}
         metal["rd"] = {"texture": grid, "factor": [0.6, 0.6, 0.6], "transform": {"scale": [2, 2]}}
-    return _two_balls({"ball": ball, "metal": metal}, lights, size)
+    return _two_balls({"ball": ball, "metal": metal, "back": back}, lights, size)

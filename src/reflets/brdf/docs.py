@@ -105,6 +105,8 @@ MAPS = {
     "microfacet": "`diffuse`, `specular` (a Schlick F₀ too: affine), `alpha`",
     "gltf": "every factor (its `*_texture` slots)",
     "scratched": "its base's textures and maps",
+    "lafortune": "`kd`; a lobe's `scale` (one texture for all: affine) or `exponent` (one texture for all)",
+    "mirror": "`diffuse`, `reflectance` (a conductor's `eta`, `k`: linear data)",
     "translucent": "`albedo_texture`: the light leaving the medium × its texel",
 }
 

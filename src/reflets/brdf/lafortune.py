@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import ClassVar, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from ..quantities import Finite
 from .base import (
@@ -19,7 +19,7 @@ from .base import (
     sample_power_cosine,
     upper,
 )
-from .maps import Mapped
+from .maps import LobeMap, Mapped
 
 #: the most lobes a material may have (the GLSL twin's uniform arrays have this size)
 MAX_LOBES = 8
@@ -63,6 +63,12 @@ class Lafortune(Mapped):
         exponent : n ≥ 0 (at most 1e6), default 20;
         scale : [r, g, b] ≥ 0, default [1, 1, 1] (the lobe's ρ_s; fitted values are often > 1).
 
+    Maps: ``kd``, and in a lobe its ``scale`` or its ``exponent`` (``scale = { texture = "spec.png", factor = [1, 1, 1]
+    }``; kept as ``maps.lobe<i>_scale``): factor × the texel (an exponent: × its R, linear data). Every mapped scale
+    reads one texture, and every mapped exponent one texture (the prefiltered environment mixes the curves with the
+    mapped scales at 0 and at their factors at the texel, or interpolates curves at texel values of the exponents);
+    scales and exponents are not mapped together; ``c`` stays constant.
+
     Always reciprocal (the lobe is symmetric in wo and wi). Energy conservation depends on the fitted
     coefficients (a lobe's albedo grows like scale·|C|^n) and is not checked, so it is never declared.
 
@@ -77,6 +83,94 @@ class Lafortune(Mapped):
     kd: Reflectance = (0.0, 0.0, 0.0)
     lobes: list[Lobe] = Field(default_factory=lambda: [Lobe()], min_length=1, max_length=MAX_LOBES)
     lambertian_field: ClassVar[str] = "kd"
+    lobe_maps: ClassVar[dict[str, LobeMap]] = {f"lobe{i}_exponent": LobeMap(low=0.0, widest="min")
+                                                for i in range(MAX_LOBES)}  # fmt: skip
+
+    @classmethod
+    def _lift_maps(cls, data: dict, maps: dict) -> tuple[dict, dict]:
+        """A lobe's ``scale = { texture = … }`` / ``exponent = …``: its texture to ``maps.lobe<i>_<field>``, its
+        factor (default 1) to the lobe."""
+        lobes = data.get("lobes")
+        if not isinstance(lobes, list):
+            return data, maps
+        lifted = []
+        for i, lobe in enumerate(lobes):
+            if isinstance(lobe, dict):
+                lobe = dict(lobe)
+                if isinstance(lobe.get("c"), dict):
+                    raise ValueError(f"lobes[{i}].c cannot be a texture (a lobe's scale or exponent can)")
+                for field, default in (("scale", (1.0, 1.0, 1.0)), ("exponent", 1.0)):
+                    value = lobe.get(field)
+                    if isinstance(value, dict) and "texture" in value:
+                        value = dict(value)
+                        lobe[field] = value.pop("factor", default)
+                        maps[f"lobe{i}_{field}"] = value
+            lifted.append(lobe)
+        return {**data, "lobes": lifted}, maps
+
+    @classmethod
+    def mappable(cls, data: dict | None = None) -> tuple[str, ...]:
+        return ("kd",)
+
+    @classmethod
+    def affine_colours(cls, data: dict | None = None) -> tuple[str, ...]:
+        """The lobes' scales: the BRDF is linear in each, so affine in one when the others stay (the split sum
+        mixes the curves with every mapped scale at 0 and at its factor)."""
+        lobes = (data or {}).get("lobes")
+        return tuple(f"lobe{i}_scale" for i in range(len(lobes) if isinstance(lobes, list) else 1))
+
+    @model_validator(mode="after")
+    def _check_maps(self) -> Lafortune:
+        for key in self.maps or {}:
+            at = self._lobe_field(key)
+            if at is not None and at[0] >= len(self.lobes):
+                raise ValueError(f"maps.{key}: there are {len(self.lobes)} lobes (lobe0 … lobe{len(self.lobes) - 1})")
+        scales = [self.maps[key] for key in self.mapped_scales]
+        if any(ref != scales[0] for ref in scales):
+            raise ValueError("the lobes' mapped scales read different textures: they must read the same one (the "
+                             "prefiltered environment mixes its curves at one texel)")
+        return self
+
+    @property
+    def mapped_scales(self) -> list[str]:
+        """The lobes' scales read from maps."""
+        return [key for key in self.maps or {} if key.endswith("_scale")]
+
+    @property
+    def mapped_affine(self) -> list[str]:
+        """One of the mapped scales (they read one texture): what the split sum mixes by."""
+        return self.mapped_scales[:1]
+
+    def affine_zeros(self) -> list[Lafortune] | None:
+        """The material with every mapped lobe scale at 0 (``Mapped.affine_zeros``: one texture, one mix)."""
+        fields = self.mapped_scales
+        return [self.with_values(dict.fromkeys(fields, (0.0, 0.0, 0.0)))] if fields else None
+
+    @staticmethod
+    def _lobe_field(key: str) -> tuple[int, str] | None:
+        if not key.startswith("lobe"):
+            return None
+        index, _, field = key[4:].partition("_")
+        return int(index), field
+
+    def factor(self, field: str):
+        at = self._lobe_field(field)
+        return getattr(self.lobes[at[0]], at[1]) if at else getattr(self, field)
+
+    def with_values(self, values: dict, points: bool = False) -> Lafortune:
+        own = {key: value for key, value in values.items() if self._lobe_field(key) is None}
+        lobes = [dict(lobe) for lobe in self.lobes]
+        for key, value in values.items():
+            at = self._lobe_field(key)
+            if at is not None:
+                lobes[at[0]][at[1]] = value
+        made = [Lobe.model_construct(**lobe) if points else Lobe(**lobe) for lobe in lobes]
+        return super().with_values({**own, "lobes": made}, points)
+
+    @classmethod
+    def uniform_of(cls, field: str) -> str:
+        at = cls._lobe_field(field)
+        return f"m_lobe_{at[1]}[{at[0]}]" if at else f"m_{field}"
 
     def lobe_summary(self):
         return tuple(float(c) for c in self.kd), 1, float(max(lobe.exponent for lobe in self.lobes))

@@ -22,8 +22,8 @@ reference evaluates the BRDF with per-point colours (:meth:`Mapped.at`), and the
 the material's albedos by the texels (``material_ibl_scale``: exact for a linear colour). A colour the BRDF is affine
 in per channel (``affine_colours``: a Schlick F₀, Ashikhmin–Shirley's ``rs`` and ``rd``) is read the same way, and
 the split sum mixes per channel between the albedo curves at 0 and at the factors (bilinearly for two such colours:
-exact, the albedo being affine in each). Lafortune's lobes and a mirror's colours are refused with the list of what
-can be mapped.
+exact, the albedo being affine in each). A mirror's ``reflectance`` (or a conductor's ``eta`` and ``k``) weights its
+traced reflections: ``fermat``'s composite and the reference's mirror bounce read it per point.
 
 A mapped lobe shape: the twin recomputes per fragment the uniforms it reads for it (the value itself, or what is
 derived from it in float64 for constant lobes — Ward's 1/α, a normalisation: ``LobeMap.derived``); the reference
@@ -129,6 +129,8 @@ class Mapped(Material):
     linear_specular: ClassVar[str | None] = None
     #: the lobe-shape fields a map may scale (a roughness, an exponent): factor × the texel's R
     lobe_maps: ClassVar[dict[str, LobeMap]] = {}
+    #: mappable colours that are linear data, not sRGB-encoded colour (a mirror's complex index)
+    data_maps: ClassVar[tuple[str, ...]] = ()
 
     @classmethod
     def mappable(cls, data: dict | None = None) -> tuple[str, ...]:
@@ -148,7 +150,7 @@ class Mapped(Material):
         """``field = { texture = … , factor = … }`` → the factor in the field, the texture in ``maps``."""
         if not isinstance(data, dict):
             return data
-        data, maps = dict(data), dict(data.get("maps") or {})
+        data, maps = cls._lift_maps(dict(data), dict(data.get("maps") or {}))
         for key, value in list(data.items()):
             if isinstance(value, TextureRef):
                 value = value.model_dump()
@@ -187,6 +189,24 @@ class Mapped(Material):
             data["emission"] = (1.0, 1.0, 1.0)
         return data
 
+    @classmethod
+    def _lift_maps(cls, data: dict, maps: dict) -> tuple[dict, dict]:
+        """Maps written inside a nested field moved to ``maps`` (Lafortune's lobes); none by default."""
+        return data, maps
+
+    def factor(self, field: str):
+        """A mapped field's factor: the field's value (a Lafortune lobe's field for ``lobe<i>_<field>``)."""
+        return getattr(self, field)
+
+    def with_values(self, values: dict, points: bool = False) -> Mapped:
+        """The material with these mapped fields' values; ``points``: per-point arrays (not validated)."""
+        return self.model_construct(**{**dict(self), **values}) if points else self.model_copy(update=values)
+
+    @classmethod
+    def uniform_of(cls, field: str) -> str:
+        """The GLSL twin's uniform holding a mapped field's factor (an array's element: ``m_lobe_scale[0]``)."""
+        return f"m_{field}"
+
     def constant_dump(self) -> dict:
         # no integral reads them (and the keys of fits made before they existed stay the same)
         return {k: v for k, v in super().constant_dump().items() if k not in ("emission", *SURFACE_MAPS)}
@@ -218,13 +238,13 @@ class Mapped(Material):
             if field in self.lobe_maps:
                 values[field] = self.lobe_values(field, self.texels(field, uv)[:, 0])
             else:
-                values[field] = np.asarray(getattr(self, field), np.float64) * self.texels(field, uv)
-        return PointsBRDF(self.model_construct(**{**dict(self), **values}).eval, self.widest_lobe())
+                values[field] = np.asarray(self.factor(field), np.float64) * self.texels(field, uv)
+        return PointsBRDF(self.with_values(values, points=True).eval, self.widest_lobe())
 
     def lobe_values(self, field: str, texels):
         """A lobe-shape field at texel values (R): factor × texel, at least the field's ``low`` (a pair of
         factors — an anisotropic roughness — scaled alike)."""
-        spec, factor = self.lobe_maps[field], getattr(self, field)
+        spec, factor = self.lobe_maps[field], self.factor(field)
         if isinstance(factor, tuple | list):
             return tuple(np.maximum(f * np.asarray(texels, np.float64), spec.low) for f in factor)
         value = np.maximum(factor * np.asarray(texels, np.float64), spec.low)
@@ -242,7 +262,7 @@ class Mapped(Material):
         if not fields:
             return None
         subsets = [fields[:1], fields[1:], fields][: 1 if len(fields) == 1 else 3]
-        return [self.model_copy(update=dict.fromkeys(subset, (0.0, 0.0, 0.0))) for subset in subsets]
+        return [self.with_values(dict.fromkeys(subset, (0.0, 0.0, 0.0))) for subset in subsets]
 
     @property
     def mapped_lobes(self) -> list[str]:
@@ -255,7 +275,7 @@ class Mapped(Material):
         for field in self.mapped_lobes:
             value = self.lobe_values(field, np.array([texel_of(field)]))
             update[field] = tuple(float(v[0]) for v in value) if isinstance(value, tuple) else float(np.ravel(value)[0])
-        return self.model_copy(update=update)
+        return self.with_values(update)
 
     def widest_lobe(self) -> Mapped:
         """The material with each mapped lobe shape at the texture's value that widens it most."""
@@ -291,11 +311,11 @@ class Mapped(Material):
         return lookup(self.maps[field], self.texture_data(field), uv, field)[:, :3]
 
     def texture_data(self, field: str):
-        """The decoded texture of a mapped field (a colour: sRGB unless its ``srgb`` says otherwise; a lobe shape:
-        linear data) or of a surface map (``normal_map``, ``occlusion``: linear data)."""
+        """The decoded texture of a mapped field (a colour: sRGB unless its ``srgb`` says otherwise; a lobe shape or
+        a ``data_maps`` field: linear data) or of a surface map (``normal_map``, ``occlusion``: linear data)."""
         if field in SURFACE_MAPS:
             return load_texture(getattr(self, field), False)
-        return load_texture(self.maps[field], field not in self.lobe_maps)  # a lobe shape's map is data
+        return load_texture(self.maps[field], field not in (*self.lobe_maps, *self.data_maps))
 
     # ------------------------------------------------------------------ the GLSL twin
 
@@ -322,17 +342,28 @@ class Mapped(Material):
         for line in read_source(self.glsl).splitlines():
             lines.append(line)
             words = line.split(";")[0].split()
-            if len(words) == 3 and words[0] == "uniform" and words[2] in values:
-                kind, name = words[1], words[2]
-                field, expression = values.pop(name)
-                lines += [f"{kind} map_factor_{name}() {{ return {name}; }}",
-                          f"{kind} g_map_{name};  // what the BRDF reads as {name} at this fragment (maps.{field})",
-                          f"#define {name} g_map_{name}"]  # fmt: skip
-                value = expression.format(factor=f"map_factor_{name}()", t=f"t_map_{field}", kind=kind)
-                assigned[name] = f"    g_map_{name} = {value};"
+            if len(words) != 3 or words[0] != "uniform":
+                continue
+            kind, (name, _, size) = words[1], words[2].partition("[")
+            size = size.rstrip("]")  # an array: its mapped elements are keys name[i]
+            keys = [key for key in values if key.partition("[")[0] == name]
+            if not keys:
+                continue
+            index, argument = ("[i]", "int i") if size else ("", "")
+            lines += [f"{kind} map_factor_{name}({argument}) {{ return {name}{index}; }}",
+                      f"{kind} g_map_{name}{'[' + size + ']' if size else ''};  // what the BRDF reads as {name} here",
+                      f"#define {name} g_map_{name}"]  # fmt: skip
+            if size:  # the unmapped elements keep their uniform's value
+                assigned[name] = f"    for (int i = 0; i < {size}; ++i) g_map_{name}[i] = map_factor_{name}(i);"
+            for key in keys:
+                field, expression = values.pop(key)
+                element = key[len(name):]  # "" or "[i]"
+                value = expression.format(factor=f"map_factor_{name}({element[1:-1]})", t=f"t_map_{field}", kind=kind)
+                assigned[key] = f"    g_map_{name}{element} = {value};"
         if values:
             raise RuntimeError(f"{self.glsl} declares no uniform {next(iter(values))} to map")
-        surface += [assigned[name] for name in order]  # the mapped values, then what is derived from them
+        arrays = [name for name in assigned if name not in order]  # copied whole before their mapped elements
+        surface += [assigned[name] for name in (*arrays, *order)]  # the mapped values, then what is derived
         if self.emission is not None:
             lines += ["uniform vec3 m_emission;", "vec3 g_emission = vec3(0.0);", "#define MATERIAL_EMISSION 1",
                       "vec3 material_emission() { return g_emission; }"]  # fmt: skip
@@ -401,10 +432,10 @@ class Mapped(Material):
         for field in self.brdf_maps:
             spec = self.lobe_maps.get(field)
             if spec is None:
-                values[f"m_{field}"] = (field, "{factor} * {t}")
+                values[self.uniform_of(field)] = (field, "{factor} * {t}")
                 continue
             if spec.own_uniform:
-                values[f"m_{field}"] = (field, f"max({{factor}} * {{t}}, {{kind}}({spec.low!r}))")
+                values[self.uniform_of(field)] = (field, f"max({{factor}} * {{t}}, {{kind}}({spec.low!r}))")
             derived.update({name: (field, expression) for name, expression in spec.derived})
         return {**values, **derived}
 

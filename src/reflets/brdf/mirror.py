@@ -8,7 +8,7 @@ do (``fermat``, the reference's mirror bounce) weight the reflected radiance by 
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 from pydantic import model_validator
@@ -34,7 +34,11 @@ class Mirror(Mapped):
         Complex index of refraction of a conductor (only with ``fresnel = "conductor"``).
     diffuse : [r, g, b] in [0, 1], default [0, 0, 0]
         Optional Lambertian part, f = diffuse/π: the only finite part of the BRDF. With a constant
-        reflectance, diffuse + reflectance must not exceed 1 per channel.
+        reflectance, diffuse + reflectance must not exceed 1 per channel (the factors, with maps).
+
+    Maps: ``diffuse`` and ``reflectance`` (sRGB colours), ``eta`` and ``k`` (linear data) may be textures, factor ×
+    texel: ``fermat``'s composite reads them at each reflector pixel's uv (the G-buffer keeps it), the reference's
+    mirror bounce at its hit's; a normal map is refused (the reflections are traced about the mesh's own normals).
     """
 
     type: Literal["mirror"] = "mirror"
@@ -44,6 +48,18 @@ class Mirror(Mapped):
     k: RGB | None = None
     diffuse: Reflectance = (0.0, 0.0, 0.0)
     glsl = "reflets/brdf/glsl/mirror.glsl"
+    lambertian_field: ClassVar[str] = "diffuse"
+    data_maps: ClassVar[tuple[str, ...]] = ("eta", "k")
+
+    @classmethod
+    def mappable(cls, data: dict | None = None) -> tuple[str, ...]:
+        """The diffuse colour and what weights the reflection: the reflectance, or a conductor's η and k (the
+        finite BRDF is linear in the diffuse colour; the delta lobe is evaluated per point by its tracers)."""
+        conductor = (data or {}).get("fresnel") == "conductor"
+        return ("diffuse", *(("eta", "k") if conductor else ("reflectance",)))
+
+    def lambertian_split(self):
+        return tuple(float(c) for c in self.diffuse), None  # the delta lobe leaves no finite part
 
     @model_validator(mode="after")
     def _check(self) -> Mirror:
@@ -66,12 +82,18 @@ class Mirror(Mapped):
     def k_rgb(self) -> tuple[float, float, float]:
         return tuple(self.k) if self.k is not None else GOLD_K
 
-    def specular_reflectance(self, cos: np.ndarray) -> np.ndarray:
-        """Weight of the mirror-reflected radiance at incidence cosine ``cos``, shape (..., 3)."""
+    def specular_reflectance(self, cos: np.ndarray, uv: np.ndarray | None = None) -> np.ndarray:
+        """Weight of the mirror-reflected radiance at incidence cosine ``cos``, shape (..., 3); ``uv``: the points'
+        uv sets (N, 4), where a map reads them (the GLSL twin's ``mirror_reflectance`` after ``material_surface``)."""
         c = np.asarray(cos, dtype=np.float64)[..., None]
+
+        def value(field: str, constant) -> np.ndarray:
+            mapped = uv is not None and field in (self.maps or {})
+            return np.asarray(constant, np.float64) * (self.texels(field, uv) if mapped else 1.0)
+
         if self.fresnel == "conductor":
-            return fresnel_conductor(c, self.eta_rgb, self.k_rgb)
-        return np.broadcast_to(np.asarray(self.reflectance, dtype=np.float64), c.shape[:-1] + (3,))
+            return fresnel_conductor(c, value("eta", self.eta_rgb), value("k", self.k_rgb))
+        return np.broadcast_to(value("reflectance", self.reflectance), c.shape[:-1] + (3,))
 
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
         f = np.broadcast_to(np.asarray(self.diffuse) / np.pi, np.shape(wo)[:-1] + (3,))

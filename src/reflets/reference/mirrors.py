@@ -190,5 +190,6 @@ class MirrorBounce:
                 start = x + ref.geometry.epsilon * n
             cos = -np.sum(d * n, -1)
             r = d + 2.0 * cos[:, None] * n
-            out[sel] = self.materials[i].specular_reflectance(cos) * ref.trace(start, r, u[rows])
+            uv = ref.geometry.uv_sets(hits.prim[rows], hits.u[rows], hits.v[rows])  # a mapped reflectance reads it
+            out[sel] = self.materials[i].specular_reflectance(cos, uv) * ref.trace(start, r, u[rows])
         return out

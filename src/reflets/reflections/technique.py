@@ -78,8 +78,9 @@ POINTS_PROGRAM = ProgramSpec(
 )
 #: SURFACE_KIND values of solver.glsl
 DEFAULT_ITERATIONS = {"robust": 8, "document": 5}
-#: texture units of the G-buffer and reflection images (materials use 1…, the environment 0)
-GBUFFER_UNITS = (12, 13, 14)
+#: texture units of the G-buffer and reflection images (materials use 1…, the environment 0); the uvs' after the
+#: material units (forward.MATERIAL_UNITS): the composite reads a mirror's maps
+GBUFFER_UNITS = (12, 13, 14, 48)
 #: texture unit of a sampled reflector's node grid
 GRID_UNIT = 15
 
@@ -311,7 +312,7 @@ class Fermat(Forward):
             )
             vao = ctx.vertex_array(program, [])
             self._objects.append(vao)
-            self._composites.append((program, vao, material.uniforms(), size))
+            self._composites.append((program, vao, material.uniforms(), material.textures(ctx), size))
 
     def _check_memory(self, scene: Scene) -> list[int]:
         """Refuse a ``subdivide`` whose reflected meshes would not fit in the available memory (reflets.resources:
@@ -417,23 +418,24 @@ class Fermat(Forward):
 
     # ------------------------------------------------------------------ per-size images
     def screen_bytes_per_sample(self) -> int:
-        """The G-buffer's position, normal and reflection (float32 RGBA, 16 B each) and two depth textures (4 B
-        each): 56 B per target sample, measured 54.5 (fermat 134.5 B per sample at 2048², forward 80)."""
-        return super().screen_bytes_per_sample() + 56
+        """The G-buffer's position, normal, uvs and reflection (float32 RGBA, 16 B each) and two depth textures (4 B
+        each): 72 B per target sample (measured 54.5 before the uvs: fermat 134.5 B per sample at 2048², forward
+        80)."""
+        return super().screen_bytes_per_sample() + 72
 
     def _images(self, size: tuple[int, int]):
-        """G-buffer (position + id, normal) and reflection image at a render size, re-created on change."""
+        """G-buffer (position + id, normal, uvs) and reflection image at a render size, re-created on change."""
         if self._gbuffer_size == size:
             return self._gbuffer
         ctx = self.ctx
-        position, normal, reflection = (ctx.texture(size, 4, dtype="f4") for _ in range(3))
-        for tex in (position, normal, reflection):
+        position, normal, uvs, reflection = (ctx.texture(size, 4, dtype="f4") for _ in range(4))
+        for tex in (position, normal, uvs, reflection):
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
         depth_g, depth_r = depth.float_depth_texture(ctx, size), ctx.depth_texture(size)  # camera: reversed-Z
-        gbuffer_fbo = ctx.framebuffer(color_attachments=[position, normal], depth_attachment=depth_g)
+        gbuffer_fbo = ctx.framebuffer(color_attachments=[position, normal, uvs], depth_attachment=depth_g)
         reflection_fbo = ctx.framebuffer(color_attachments=[reflection], depth_attachment=depth_r)
-        self._objects += [position, normal, reflection, depth_g, depth_r, gbuffer_fbo, reflection_fbo]
-        self._gbuffer = (gbuffer_fbo, reflection_fbo, position, normal, reflection)
+        self._objects += [position, normal, uvs, reflection, depth_g, depth_r, gbuffer_fbo, reflection_fbo]
+        self._gbuffer = (gbuffer_fbo, reflection_fbo, position, normal, uvs, reflection)
         self._gbuffer_size = size
         return self._gbuffer
 
@@ -443,7 +445,7 @@ class Fermat(Forward):
         if self.params.output != "radiance" or not self.role.extras:
             return
         ctx = self.ctx
-        gbuffer_fbo, reflection_fbo, position, normal, reflection = self._images(target.size)
+        gbuffer_fbo, reflection_fbo, position, normal, uvs, reflection = self._images(target.size)
         eye = tuple(float(c) for c in self.scene.camera.position)
         ctx.enable(ctx.DEPTH_TEST)
         ctx.disable(ctx.CULL_FACE)
@@ -459,7 +461,7 @@ class Fermat(Forward):
         normal.use(GBUFFER_UNITS[1])
         for k, draws in enumerate(self._reflection_draws):
             reflector_id = float(k + 1)
-            program_c, vao_c, material_uniforms, size = self._composites[k]
+            program_c, vao_c, material_uniforms, material_textures, size = self._composites[k]
             reflection_fbo.use()
             ctx.viewport = (0, 0, *target.size)
             reflection_fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
@@ -489,11 +491,14 @@ class Fermat(Forward):
             ctx.enable(ctx.BLEND)
             ctx.blend_func = moderngl.ONE, moderngl.ONE
             reflection.use(GBUFFER_UNITS[2])
+            uvs.use(GBUFFER_UNITS[3])
             uniforms = {
                 **material_uniforms,
+                **bind_material_textures(material_textures),
                 "u_gbuffer_position": GBUFFER_UNITS[0],
                 "u_gbuffer_normal": GBUFFER_UNITS[1],
                 "u_reflection": GBUFFER_UNITS[2],
+                "u_gbuffer_uvs": GBUFFER_UNITS[3],
                 "u_reflector_id": reflector_id,
                 "u_eye": eye,
             }

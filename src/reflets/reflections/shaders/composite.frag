@@ -1,12 +1,14 @@
-// Provides the last pass of the fermat method: on the pixels of one reflector, add reflectance × the reflected
-// radiance (the reflected scene where it was drawn, else the background along the mirror direction — exact for
-// an environment at infinity). Blended additively onto the image that already holds the non-specular part.
+// Provides the last pass of the fermat method: on the pixels of one reflector, add reflectance (its maps read at
+// the pixel's uv) × the reflected radiance (the reflected scene where it was drawn, else the background along the
+// mirror direction — exact for an environment at infinity). Blended additively onto the image that already holds
+// the non-specular part.
 #include BRDF
 
 in vec2 v_ndc;
 
 uniform sampler2D u_gbuffer_position;
 uniform sampler2D u_gbuffer_normal;
+uniform sampler2D u_gbuffer_uvs;
 uniform sampler2D u_reflection;
 uniform float u_reflector_id;
 uniform vec3 u_eye;
@@ -33,5 +35,9 @@ void main() {
     vec3 behind = u_background;
 #endif
     vec3 radiance = reflected.a > 0.5 ? reflected.rgb : behind;
+#ifdef MATERIAL_SURFACE
+    mat3 frame = mat3(1.0);  // a mirror has no normal map
+    material_surface(texelFetch(u_gbuffer_uvs, pixel, 0), frame);
+#endif
     f_color = vec4(mirror_reflectance(max(dot(n, v), 0.0)) * radiance, 1.0);
 }
