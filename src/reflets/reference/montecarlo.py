@@ -83,12 +83,13 @@ def _check_adaptive(error, max_spp, spp: int) -> None:
 
 
 def _mis(p_this: np.ndarray, p_other: np.ndarray, heuristic: str) -> np.ndarray:
-    if heuristic == "power":
-        a, b = p_this * p_this, p_other * p_other
-    else:
-        a, b = p_this, p_other
-    total = a + b
-    return np.where(total > 0, a / np.where(total > 0, total, 1.0), 0.0)
+    """The strategy's MIS weight, from the ratio of the densities (their squares overflow for a near-delta lobe's
+    huge pdf): 1 / (1 + r²) (power) or 1 / (1 + r) (balance), r = p_other / p_this; 0 where p_this is 0."""
+    ok = p_this > 0
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        r = p_other / np.where(ok, p_this, 1.0)
+        r = np.nan_to_num(r, nan=1.0, posinf=np.inf)  # two infinite densities: an even split
+        return np.where(ok, 1.0 / (1.0 + (r * r if heuristic == "power" else r)), 0.0)
 
 
 def _latin_hypercube(rng: np.random.Generator, pixels: int, spp: int, dims: int) -> np.ndarray:
