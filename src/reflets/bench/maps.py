@@ -148,15 +148,20 @@ def _two_balls(materials: dict, lights: list, size) -> Scene:
 
 
 def lobe_maps_scene(directory: str | Path, lights: list, size=(96, 72), maps: bool = True) -> Scene:
-    """Lobe shapes read from a map of four grey bands (``_bands``): a GGX conductor's roughness α (factor 0.6) and a
-    Phong ball's exponent (factor 200); ``maps`` False: the factors alone."""
+    """Lobe shapes read from a map of four grey bands (``_bands``): a GGX conductor's roughness α (factor 0.6), a
+    Phong ball's exponent (factor 200), and a small ball in front with both a roughness (factor 0.5) and a Schlick F₀
+    from the uv grid (factor 0.8: specular-glossiness); ``maps`` False: the factors alone."""
     texture = _bands(directory)
     metal = {"type": "microfacet", "fresnel": "conductor", "alpha": 0.6}
     ball = {"type": "phong", "kd": [0.3, 0.2, 0.1], "ks": [0.5, 0.5, 0.5], "exponent": 200, "normalized": True}
+    front = {"type": "microfacet", "fresnel": "schlick", "diffuse": [0.2, 0.1, 0.05], "alpha": 0.5,
+             "specular": [0.8, 0.8, 0.8]}  # fmt: skip
     if maps:
         metal["alpha"] = {"texture": texture, "factor": 0.6}
         ball["exponent"] = {"texture": texture, "factor": 200}
-    return _two_balls({"ball": ball, "metal": metal}, lights, size)
+        front["alpha"] = {"texture": texture, "factor": 0.5}
+        front["specular"] = {"texture": str(UV_GRID), "factor": [0.8, 0.8, 0.8]}
+    return _two_balls({"ball": ball, "metal": metal, "front": front}, lights, size)
 
 
 def other_lobe_maps_scene(directory: str | Path, lights: list, size=(96, 72)) -> Scene:

@@ -71,14 +71,16 @@ Both renderers read the texels into the parameters before evaluating the BRDF (G
 anisotropic mips; reference: bilinear lookups at each hit, averaged over a supersampled pixel). The prefiltered
 environment scales the albedos by a colour map's texels — exact for a linear colour —, mixes per channel between the
 albedo curves at 0 and at the factors for an affine one (bilinearly for two: exact too) and, for a mapped lobe shape,
-interpolates albedo curves and prefiltered levels computed at eight texel values. A normal map (glTF's encoding) turns
+interpolates albedo curves and prefiltered levels computed at eight texel values (and the curves at 0 of one mapped
+affine colour with it: a roughness and a Schlick F₀ — specular-glossiness). A normal map (glTF's encoding) turns
 the shading frame in both renderers; emission adds to every pass; occlusion darkens the environment's light only (glTF's
-rule; the references trace occlusion themselves). Lafortune's lobes, a mirror's colours (its reflections are traced) and
-an affine colour together with a mapped lobe shape are refused in one line: glTF's material (`type = "gltf"`) maps
-metalness and the rest. The area-light methods that integrate constant parameters (`ltc`, `analytic`, `biased`) leave a
-material with mapped colours or lobes to `forward` in `auto` (asked for by name, they integrate the factors and say so);
-a normal map, emission or occlusion alone keeps them. Measured against the reference: docs/assets.md, *Textures on the
-library's materials*.
+rule; the references trace occlusion themselves). A mirror's colours weight its traced reflections (`fermat`'s
+composite and the reference's mirror bounce read them per point). Refused in one line: a Lafortune lobe's `c`, two
+affine colours with a mapped lobe shape (Ashikhmin–Shirley's rs, rd and nu / nv); glTF's material (`type = "gltf"`)
+maps metalness and the rest. The area-light methods that integrate constant parameters (`ltc`, `analytic`,
+`biased`) leave a material with mapped colours or lobes to `forward` in `auto` (asked for by name, they integrate the
+factors and say so); a normal map, emission or occlusion alone keeps them. Measured against the reference:
+docs/assets.md, *Textures on the library's materials*.
 
 | type | reciprocal | energy conserving | texture maps |
 |---|---|---|---|

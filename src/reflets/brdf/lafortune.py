@@ -66,8 +66,8 @@ class Lafortune(Mapped):
     Maps: ``kd``, and in a lobe its ``scale`` or its ``exponent`` (``scale = { texture = "spec.png", factor = [1, 1, 1]
     }``; kept as ``maps.lobe<i>_scale``): factor × the texel (an exponent: × its R, linear data). Every mapped scale
     reads one texture, and every mapped exponent one texture (the prefiltered environment mixes the curves with the
-    mapped scales at 0 and at their factors at the texel, or interpolates curves at texel values of the exponents);
-    scales and exponents are not mapped together; ``c`` stays constant.
+    mapped scales at 0 and at their factors at the texel, and interpolates curves at texel values of the exponents);
+    ``c`` stays constant.
 
     Always reciprocal (the lobe is symmetric in wo and wi). Energy conservation depends on the fitted
     coefficients (a lobe's albedo grows like scale·|C|^n) and is not checked, so it is never declared.
@@ -83,6 +83,7 @@ class Lafortune(Mapped):
     kd: Reflectance = (0.0, 0.0, 0.0)
     lobes: list[Lobe] = Field(default_factory=lambda: [Lobe()], min_length=1, max_length=MAX_LOBES)
     lambertian_field: ClassVar[str] = "kd"
+    affine_group: ClassVar[bool] = True  # every mapped lobe scale reads one texture
     lobe_maps: ClassVar[dict[str, LobeMap]] = {f"lobe{i}_exponent": LobeMap(low=0.0, widest="min")
                                                 for i in range(MAX_LOBES)}  # fmt: skip
 

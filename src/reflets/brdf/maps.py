@@ -29,7 +29,8 @@ A mapped lobe shape: the twin recomputes per fragment the uniforms it reads for 
 derived from it in float64 for constant lobes — Ward's 1/α, a normalisation: ``LobeMap.derived``); the reference
 evaluates each hit at its own value and samples by the texture's widest lobe (a density wherever any point's BRDF is
 not zero); the prefiltered environment interpolates albedo curves and equivalent roughness computed at
-``LOBE_NODES`` texel values (several mapped lobe fields must therefore read one texture).
+``LOBE_NODES`` texel values (several mapped lobe fields must therefore read one texture), and with one mapped affine
+colour (a roughness and a Schlick F₀: specular-glossiness) mixes them with the same curves at its 0.
 
 The surface maps, on every library material (glTF's conventions, so that an asset's maps mean the same here):
 
@@ -131,6 +132,8 @@ class Mapped(Material):
     lobe_maps: ClassVar[dict[str, LobeMap]] = {}
     #: mappable colours that are linear data, not sRGB-encoded colour (a mirror's complex index)
     data_maps: ClassVar[tuple[str, ...]] = ()
+    #: do the mapped affine colours read one texture and mix as one (Lafortune's lobe scales)?
+    affine_group: ClassVar[bool] = False
 
     @classmethod
     def mappable(cls, data: dict | None = None) -> tuple[str, ...]:
@@ -177,9 +180,10 @@ class Mapped(Material):
                     )
             affine = [key for key in maps if key in cls.affine_colours(data)]  # (two at most: A-S's rs and rd)
             lobed = [key for key in maps if key in cls.lobe_maps]
-            if affine and lobed:
-                raise ValueError(f"{', '.join(affine)} and {', '.join(lobed)} cannot all be textures: the prefiltered "
-                                 "environment does not interpolate affine colours with a mapped lobe shape")
+            if len(affine) > (len(affine) if cls.affine_group else 1) and lobed:
+                raise ValueError(f"{', '.join(affine)} and {', '.join(lobed)} cannot all be textures: with a mapped "
+                                 "lobe shape, one affine colour at most (the prefiltered environment's curves at 0 "
+                                 "for each would not fit a shader's uniforms)")
             lobes = [TextureRef.model_validate(maps[key]) for key in lobed]
             if any(ref != lobes[0] for ref in lobes):  # the same file, uv, transform…
                 raise ValueError(f"{' and '.join(lobed)} read different textures: mapped lobe shapes must read "
@@ -389,7 +393,7 @@ class Mapped(Material):
                              for albedo, field in (("diffuse_albedo", self.lambertian_field),
                                                    ("albedo", self.linear_specular)))  # fmt: skip
         lines += self._lobe_ibl(specular)
-        scale = [*diffuse, *specular, *self._affine_ibl(affine, lines)]
+        scale = [*diffuse, *specular, *(self._affine_ibl(affine, lines) if not self.mapped_lobes else [])]
         text = "\n".join([
             *lines,
             "#define MATERIAL_SURFACE 1",
@@ -442,17 +446,26 @@ class Mapped(Material):
     def _lobe_ibl(self, specular_scale: list[str]) -> list[str]:
         """A mapped lobe shape's split sum (lights.glsl's MATERIAL_IBL): the albedo curves and equivalent roughness
         at ``LOBE_NODES`` texel values (``lobe_nodes``; ibl.py sets them) interpolated at the fragment's texel (in
-        √t, the nodes' spacing), a mapped specular colour's texels on them (``specular_scale``); the diffuse albedo
-        is the model's own (its mapped value included)."""
+        √t, the nodes' spacing), a mapped specular colour's texels on them (``specular_scale``), and a mapped affine
+        colour's mix with the curves at 0, interpolated the same way (``u_map_ibl_zero_nodes``: exact in the colour,
+        as ``_affine_ibl``); the diffuse albedo is the model's own (its mapped value included)."""
         if not self.mapped_lobes:
             return []
         diffuse = f"m_{self.lambertian_field}" if self.lambertian_field else "vec3(0.0)"
+        affine = self.mapped_affine
+        zeros = ["uniform vec3 u_map_ibl_zero_nodes[IBL_NODES * MAP_IBL_NODES];  // the same at the affine colour's 0"]
+        mixed = [
+            "    vec3 z0 = mix(u_map_ibl_zero_nodes[n0 + k0], u_map_ibl_zero_nodes[n0 + k1], fk);",
+            "    vec3 z1 = mix(u_map_ibl_zero_nodes[n1 + k0], u_map_ibl_zero_nodes[n1 + k1], fk);",
+            f"    albedo = mix(mix(z0, z1, s - float(j)), albedo, t_map_{affine[0]});",
+        ] if affine else []  # fmt: skip
         return [
             "#if defined(ENV_IBL) && ENV_IBL",
             "#define MATERIAL_IBL 1",
             f"const int MAP_IBL_NODES = {LOBE_NODES};",
             "uniform vec3 u_map_ibl_albedo[IBL_NODES * MAP_IBL_NODES];  // node j's curve at [j * IBL_NODES + k]",
             "uniform float u_map_ibl_alpha[MAP_IBL_NODES];",
+            *(zeros if affine else []),
             "void material_ibl(float mu, out vec3 diffuse_albedo, out vec3 albedo, out float alpha) {",
             f"    float s = sqrt(clamp(t_map_{self.mapped_lobes[0]}, 0.0, 1.0)) * float(MAP_IBL_NODES - 1);",
             "    int j = min(int(s), MAP_IBL_NODES - 2);",
@@ -463,6 +476,7 @@ class Mapped(Material):
             "    vec3 a0 = mix(u_map_ibl_albedo[n0 + k0], u_map_ibl_albedo[n0 + k1], fk);",
             "    vec3 a1 = mix(u_map_ibl_albedo[n1 + k0], u_map_ibl_albedo[n1 + k1], fk);",
             "    albedo = mix(a0, a1, s - float(j));",
+            *mixed,
             "    alpha = mix(u_map_ibl_alpha[j], u_map_ibl_alpha[j + 1], s - float(j));",
             f"    diffuse_albedo = {diffuse};",
             *specular_scale,

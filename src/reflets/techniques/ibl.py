@@ -201,6 +201,9 @@ class PrefilteredEnvironment:
         lobes = material.lobe_nodes()
         if lobes is not None:  # a mapped lobe shape: the curves at maps.lobe_node_texels (its MATERIAL_IBL reads them)
             curves = np.concatenate([cached_specular_albedo(m) for m in lobes])
+            if material.affine_zeros() is not None:  # and a mapped affine colour: each node's curve at its 0 too
+                zeros = np.concatenate([cached_specular_albedo(m.affine_zeros()[0]) for m in lobes])
+                maps["u_map_ibl_zero_nodes"] = zeros.astype(np.float32).tobytes()
             return {"u_map_ibl_albedo": curves.astype(np.float32).tobytes(),
                     "u_map_ibl_alpha": np.array([equivalent_alpha(m) for m in lobes], np.float32).tobytes(), **maps}
         zeros = material.affine_zeros()
