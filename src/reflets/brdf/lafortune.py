@@ -8,6 +8,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from ..quantities import Finite
+from ..textures import TextureRef
 from .base import (
     RGB,
     Reflectance,
@@ -102,6 +103,8 @@ class Lafortune(Mapped):
                     raise ValueError(f"lobes[{i}].c cannot be a texture (a lobe's scale or exponent can)")
                 for field, default in (("scale", (1.0, 1.0, 1.0)), ("exponent", 1.0)):
                     value = lobe.get(field)
+                    if isinstance(value, TextureRef):
+                        value = value.model_dump()
                     if isinstance(value, dict) and "texture" in value:
                         value = dict(value)
                         lobe[field] = value.pop("factor", default)

@@ -333,7 +333,7 @@ class Mapped(Material):
         from ..gpu.programs import read_source, register_source
 
         def texel(sampler: str, ref: TextureRef) -> str:
-            return f"texture({sampler}, ({sampler}_uv * vec3({'uvs.zw' if ref.uv else 'uvs.xy'}, 1.0)).xy)"
+            return f"MAP_TEXTURE({sampler}, ({sampler}_uv * vec3({'uvs.zw' if ref.uv else 'uvs.xy'}, 1.0)).xy)"
 
         lines, surface, maps = [], [], self.maps or {}
         values = self._fragment_values()  # uniform → (field, GLSL expression of {factor}, {t})
@@ -395,6 +395,9 @@ class Mapped(Material):
         lines += self._lobe_ibl(specular)
         scale = [*diffuse, *specular, *(self._affine_ibl(affine, lines) if not self.mapped_lobes else [])]
         text = "\n".join([
+            "#ifndef MAP_TEXTURE  // a pass without the mesh's own uv derivatives samples the base level",
+            "#define MAP_TEXTURE texture",
+            "#endif",
             *lines,
             "#define MATERIAL_SURFACE 1",
             "#define MATERIAL_IBL_SCALE 1",

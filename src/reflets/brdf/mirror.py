@@ -61,6 +61,12 @@ class Mirror(Mapped):
     def lambertian_split(self):
         return tuple(float(c) for c in self.diffuse), None  # the delta lobe leaves no finite part
 
+    def lobe_summary(self):
+        return tuple(float(c) for c in self.diffuse), 0, 0.0  # the cone-based methods: the diffuse part alone
+
+    def factor(self, field: str):
+        return {"eta": self.eta_rgb, "k": self.k_rgb}.get(field) or getattr(self, field)  # (None: gold's)
+
     @model_validator(mode="after")
     def _check(self) -> Mirror:
         if (self.eta is not None or self.k is not None) and self.fresnel != "conductor":

@@ -87,8 +87,7 @@ def _mis(p_this: np.ndarray, p_other: np.ndarray, heuristic: str) -> np.ndarray:
     huge pdf): 1 / (1 + r²) (power) or 1 / (1 + r) (balance), r = p_other / p_this; 0 where p_this is 0."""
     ok = p_this > 0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        r = p_other / np.where(ok, p_this, 1.0)
-        r = np.nan_to_num(r, nan=1.0, posinf=np.inf)  # two infinite densities: an even split
+        r = np.where(np.isinf(p_this) & np.isinf(p_other), 1.0, p_other / np.where(ok, p_this, 1.0))  # ∞/∞: even
         return np.where(ok, 1.0 / (1.0 + (r * r if heuristic == "power" else r)), 0.0)
 
 

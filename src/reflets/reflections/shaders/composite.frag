@@ -2,6 +2,9 @@
 // the pixel's uv) × the reflected radiance (the reflected scene where it was drawn, else the background along the
 // mirror direction — exact for an environment at infinity). Blended additively onto the image that already holds
 // the non-specular part.
+// A full-screen pass: the uvs come from the G-buffer, whose neighbours' differences (a uv seam, a silhouette) are no
+// footprint, so a mapped reflectance is read at the base level (the pixel's supersampling filters it).
+#define MAP_TEXTURE(s, p) textureLod(s, p, 0.0)
 #include BRDF
 
 in vec2 v_ndc;
