@@ -166,7 +166,7 @@ def test_samples_per_pixel_times_size_is_refused_with_the_spp_that_fits(monkeypa
 
 def test_fermat_counts_its_g_buffer_per_sample(monkeypatch):
     monkeypatch.setenv(ENV_VAR, "100MB")
-    with pytest.raises(ResourceError, match=r"^size: 1024x768 .*× 136 B"):
+    with pytest.raises(ResourceError, match=r"^size: 1024x768 .*× 152 B"):  # 80 forward + 72 G-buffer
         reflets.render(TEAPOT, method="fermat", size=(1024, 768), subdivide=1)
 
 
