@@ -44,7 +44,7 @@ class PreparedScene:
         self.meshes: list[MeshData] = [mesh_data(scene, i) for i in range(len(scene.mesh))]
         self._masks = load_masks(scene)  # by light index in this scene; passes ask by light (``mask_of``)
         #: the environment map (H, W, 3) float32 × its scale, or None; its texture (repeat in u) or None
-        self.environment = load_environment(scene)
+        self.environment = load_environment(scene, residual=True)  # the emitters split off are lights of ``scene``
         self.environment_texture = None
         if self.environment is not None:
             env = self.environment

@@ -1,0 +1,78 @@
+"""Compact emitters split off an environment map (scene/map_emitters.py): found by the stated rule, power kept
+exactly between the residual map and the emitters, directions in the world, and the GPU's scene."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import reflets
+from reflets.equirect import equirect_direction, equirect_uv, row_solid_angles
+from reflets.scene.environment import load_environment
+from reflets.scene.map_emitters import find_emitters, with_map_emitters
+
+
+def sky_with_sun(column: int = 80, row: int = 20, size=(128, 256)) -> np.ndarray:
+    """A uniform sky (0.5, 0.6, 0.8) with a 3 × 3 sun of 4000 and a wide bright band (60, not compact) below it."""
+    h, w = size
+    sky = np.empty((h, w, 3), np.float32)
+    sky[...] = (0.5, 0.6, 0.8)
+    cols = np.arange(column - 1, column + 2) % w
+    sky[row - 1 : row + 2][:, cols] = (4000.0, 3800.0, 3000.0)
+    sky[60:68] = (60.0, 60.0, 60.0)  # 8 rows around the horizon: a bright but wide region
+    return sky
+
+
+def power(image: np.ndarray) -> np.ndarray:
+    h, w, _ = image.shape
+    return np.sum(image.astype(np.float64) * row_solid_angles(h, w)[:, None, None], axis=(0, 1))
+
+
+def test_the_sun_is_found_and_the_power_is_kept_exactly():
+    sky = sky_with_sun()
+    emitters, residual = find_emitters(sky)
+    assert len(emitters) == 1  # the band is bright but not compact: it stays in the map
+    sun = emitters[0]
+    expected = equirect_direction((80 + 0.5) / 256, (20 + 0.5) / 128)
+    assert np.degrees(np.arccos(np.clip(np.dot(sun.direction, expected), -1, 1))) < 1.0
+    assert sun.texels == 9 and sun.solid_angle == pytest.approx(9 * row_solid_angles(128, 256)[20], rel=0.05)
+    np.testing.assert_allclose(power(residual) + np.array(sun.power), power(sky), rtol=1e-6)
+    assert np.all(residual <= sky) and np.array_equal(residual[60:68], sky[60:68])
+    assert residual.max() < 100  # the sun's texels keep the threshold's luminance: the map stays continuous
+
+
+def test_a_sun_across_the_seam_is_one_emitter_and_rotate_y_turns_it():
+    sky = sky_with_sun(column=0)  # columns 255, 0 and 1
+    emitters, _ = find_emitters(sky)
+    assert len(emitters) == 1 and emitters[0].texels == 9
+    u, _ = equirect_uv(np.asarray(emitters[0].direction))
+    assert min(u, 1 - u) < 1 / 256
+    turned, _ = find_emitters(sky, rotate_y=90.0)
+    x, y, z = emitters[0].direction
+    np.testing.assert_allclose(turned[0].direction, (z, y, -x), atol=1e-9)  # R_y(90°) of the direction
+
+
+def test_a_map_without_a_compact_emitter_is_left_whole():
+    sky = sky_with_sun()
+    sky[18:22] = 0.5  # no sun: only the wide band
+    emitters, residual = find_emitters(sky)
+    assert emitters == [] and np.array_equal(residual, sky)
+
+
+def test_the_gpu_scene_gets_the_sun_as_a_shadowed_directional_light(tmp_path):
+    np.save(tmp_path / "sky.npy", sky_with_sun())
+    data = {"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]},
+            "materials": {"m": {"type": "lambert"}}, "mesh": [{"shape": "sphere", "material": "m"}],
+            "light": [{"type": "point", "position": [0, 2, 2], "intensity": [1, 1, 1]},
+                      {"type": "environment", "file": "sky.npy", "scale": 0.5, "emitters": "extract"}]}  # fmt: skip
+    scene = reflets.load_dict(data, base_dir=tmp_path)
+    gpu = with_map_emitters(scene)
+    assert [light.type for light in gpu.light] == ["point", "environment", "directional"]
+    sun = find_emitters(sky_with_sun())[0][0]
+    np.testing.assert_allclose(gpu.light[2].irradiance, 0.5 * np.array(sun.power), rtol=1e-6)
+    np.testing.assert_allclose(gpu.light[2].direction, -np.array(sun.direction), atol=1e-9)
+    whole, rest = load_environment(scene), load_environment(scene, residual=True)
+    np.testing.assert_allclose(power(rest) + np.array(gpu.light[2].irradiance), power(whole), rtol=1e-6)
+    whole_map = scene.light[1].model_copy(update={"emitters": "keep"})
+    kept = scene.model_copy(update={"light": [scene.light[0], whole_map]})
+    assert with_map_emitters(kept) is kept and np.array_equal(load_environment(kept, residual=True), whole)
