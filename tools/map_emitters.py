@@ -2,7 +2,7 @@
 the whole map prefiltered: what the rule finds in the shipped maps, then GGX spheres (F = 0.9, separable masking,
 96 × 72) under kloppenheim_05, the sky and the studio map, and a sphere on a floor under kloppenheim_05 (128 × 96),
 each against the NumPy reference (256 spp, the whole map, with visibility); relative MSE over the sphere's (the
-floor's) pixels — the numbers of docs/techniques/environment-lighting.md.
+floor's) pixels; and the frame's cost under the sky — the numbers of docs/techniques/environment-lighting.md.
 
     python tools/map_emitters.py
 """
@@ -42,6 +42,34 @@ def floor_scene(hdr: str, emitters: str):
     })  # fmt: skip
 
 
+def frame_costs(frames: int = 20) -> str:
+    """Median frame times of persistent renderers drawn in turn (one run: their ratios hold on a shared machine):
+    the sphere on the floor under the sky, whole map / its sun as a light, and under one point light."""
+    import time
+
+    def floor_under(lights):
+        return floor_scene(MAPS["sky"], "keep").model_copy(update={"light": lights})
+
+    sky = floor_scene(MAPS["sky"], "keep").light[0]
+    point = reflets.load_dict({"camera": {"position": [0, 0, 1], "look_at": [0, 0, 0]},
+                               "light": [{"type": "point", "position": [2, 3, 4], "intensity": [20, 20, 20]}]}).light
+    scenes = {"whole map": floor_under([sky]), "sun as a light": floor_under([sky.model_copy(update={"emitters":
+              "extract"})]), "one point light": floor_under(point)}  # fmt: skip
+    renderers = {name: reflets.Renderer(scene, size=(320, 240)) for name, scene in scenes.items()}
+    times = {name: [] for name in renderers}
+    for renderer in renderers.values():
+        renderer.render()
+    for i in range(frames):
+        for name, renderer in renderers.items():
+            renderer.set_camera(position=[0.01 * i, 2.5, 5])
+            start = time.perf_counter()
+            renderer.render()
+            times[name].append(1e3 * (time.perf_counter() - start))
+    for renderer in renderers.values():
+        renderer.release()
+    return ", ".join(f"{name} {np.median(t):.1f} ms" for name, t in times.items())
+
+
 def errors(make, masks) -> list[str]:
     """Relative MSE of the GPU image with the whole map and with its emitters split off, over each mask."""
     ref = reflets.reference(make("keep"), spp=256, progress=False).image
@@ -69,6 +97,7 @@ def main() -> None:
     sphere = np.any(position != 0, axis=-1) & ~floor
     keep, extract = errors(lambda mode: floor_scene(hdr, mode), [sphere, floor])
     print(f"kloppenheim_05, sphere / floor: whole map {keep}, emitters as lights {extract}")
+    print(f"the sphere on the floor under the sky, 320 × 240, median frame: {frame_costs()}")
 
 
 if __name__ == "__main__":

@@ -148,7 +148,8 @@ def test_a_sun_drawn_more_than_once_is_looked_up_at_every_pixel(tmp_path, ctx):
     sky = np.full((128, 256, 3), 0.05, np.float32)
     sky[34, 160] = 8000.0  # a 1.4° sun with about 85 % of the map's power
     np.save(tmp_path / "sun.npy", sky)
-    scene = sphere_on_sky_floor(env={"type": "environment", "file": str(tmp_path / "sun.npy")})
+    # the sun kept in the map (emitters = "keep"): the occlusion views are what this tests
+    scene = sphere_on_sky_floor(env={"type": "environment", "file": str(tmp_path / "sun.npy"), "emitters": "keep"})
     prepared = PreparedScene(ctx, scene)
     try:
         first_dir = np.frombuffer(prepared.shadows.environment_uniforms["u_env_dir"], np.float32)[:3]

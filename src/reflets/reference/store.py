@@ -57,8 +57,10 @@ def _digest(description: dict) -> str:
     scene["mesh"] = [  # a mesh's glTF part: None (added later) for every file mesh made before
         {k: v for k, v in mesh.items() if not (k == "part" and v is None)} for mesh in scene.get("mesh", [])
     ]
-    scene["light"] = [  # and a point light's spot cone: None (added later) for every light made before
-        {k: v for k, v in light.items() if not (k == "shadows" and v is True) and not (k == "spot" and v is None)}
+    scene["light"] = [  # and a point light's spot cone: None (added later) for every light made before; an
+        # environment's ``emitters``: how the GPU renders the map, never what the references see
+        {k: v for k, v in light.items()
+         if not (k == "shadows" and v is True) and not (k == "spot" and v is None) and k != "emitters"}
         for light in scene.get("light", [])
     ]
     if "camera" in scene:  # a calibrated or orthographic camera's fields, at the pinhole older references had

@@ -20,7 +20,8 @@ The rule (:func:`find_emitters`), on luminance Y (Rec. 709) and texel solid angl
 
 An emitter is rendered as a directional light of irradiance Σ (L − L_residual) ω (its power: the cap is small,
 cos θ ≈ 1 over it), shadowed by the cascades — not yet as a cap of its angular size (no penumbra, a highlight
-as sharp as a point's): ``EnvironmentLight.emitters = "extract"`` opts in. The references always see the whole map.
+as sharp as a point's): ``EnvironmentLight.emitters``, "extract" by default ("keep": the whole map prefiltered).
+The references always see the whole map.
 """
 
 from __future__ import annotations

@@ -403,7 +403,7 @@ class EnvironmentLight(Strict):
     rotate_y: Finite = 0.0
     shadows: bool = Field(True, description="occluded by the scene (GPU: shadow maps from 32 directions)")
     emitters: Literal["keep", "extract"] = Field(
-        "keep", description='"extract": the GPU renders the map\'s compact emitters (a sun) as directional lights and '
+        "extract", description='"extract": the GPU renders the map\'s compact emitters (a sun) as directional lights and '
         "prefilters the rest (scene.map_emitters); the references always see the whole map")
 
 
