@@ -9,7 +9,7 @@ import pytest
 import reflets
 from reflets.equirect import equirect_direction, equirect_uv, row_solid_angles
 from reflets.scene.environment import load_environment
-from reflets.scene.map_emitters import find_emitters, with_map_emitters
+from reflets.scene.map_emitters import find_emitters, is_split, split_map, with_map_emitters
 
 
 def sky_with_sun(column: int = 80, row: int = 20, size=(128, 256)) -> np.ndarray:
@@ -59,20 +59,31 @@ def test_a_map_without_a_compact_emitter_is_left_whole():
     assert emitters == [] and np.array_equal(residual, sky)
 
 
-def test_the_gpu_scene_gets_the_sun_as_a_shadowed_directional_light(tmp_path):
+def test_the_gpu_scene_gets_the_sun_as_a_shadowed_directional_light(tmp_path, ctx):
+    from reflets.techniques.prepared import PreparedScene
+
     np.save(tmp_path / "sky.npy", sky_with_sun())
-    data = {"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]},
-            "materials": {"m": {"type": "lambert"}}, "mesh": [{"shape": "sphere", "material": "m"}],
+    sun = find_emitters(sky_with_sun())[0][0]
+    data = {"camera": {"position": [0, 0, 0], "look_at": list(4 * np.array(sun.direction)), "fov_y": 20,
+                       "size": [32, 24]},
+            "materials": {"m": {"type": "lambert"}}, "mesh": [{"shape": "sphere", "material": "m",
+                                                               "transform": {"translate": [0, -5, 0]}}],
             "light": [{"type": "point", "position": [0, 2, 2], "intensity": [1, 1, 1]},
-                      {"type": "environment", "file": "sky.npy", "scale": 0.5, "emitters": "extract"}]}  # fmt: skip
-    scene = reflets.load_dict(data, base_dir=tmp_path)
+                      {"type": "environment", "file": "sky.npy", "scale": 0.5}]}  # fmt: skip
+    scene = reflets.load_dict(data, base_dir=tmp_path)  # emitters = "extract": the default
     gpu = with_map_emitters(scene)
     assert [light.type for light in gpu.light] == ["point", "environment", "directional"]
-    sun = find_emitters(sky_with_sun())[0][0]
+    assert is_split(gpu) and not is_split(scene) and with_map_emitters(gpu) is gpu
     np.testing.assert_allclose(gpu.light[2].irradiance, 0.5 * np.array(sun.power), rtol=1e-6)
     np.testing.assert_allclose(gpu.light[2].direction, -np.array(sun.direction), atol=1e-9)
-    whole, rest = load_environment(scene), load_environment(scene, residual=True)
+    whole, rest = load_environment(scene), split_map(scene)[1]
     np.testing.assert_allclose(power(rest) + np.array(gpu.light[2].irradiance), power(whole), rtol=1e-6)
-    whole_map = scene.light[1].model_copy(update={"emitters": "keep"})
-    kept = scene.model_copy(update={"light": [scene.light[0], whole_map]})
-    assert with_map_emitters(kept) is kept and np.array_equal(load_environment(kept, residual=True), whole)
+    for prepared_from, lit_by in ((gpu, rest), (scene, whole)):  # prepared without the split: the whole map lights
+        prepared = PreparedScene(ctx, prepared_from)
+        try:
+            assert np.array_equal(prepared.environment, lit_by)
+        finally:
+            prepared.release()
+    assert reflets.render(scene).max() > 1000  # the sun seen in the background: the whole map is shown
+    kept = scene.model_copy(update={"light": [scene.light[0], scene.light[1].model_copy(update={"emitters": "keep"})]})
+    assert with_map_emitters(kept) is kept and split_map(kept) is None

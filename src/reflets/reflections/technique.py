@@ -506,7 +506,7 @@ class Fermat(Forward):
             if color is None:
                 from ..equirect import rotation_y
 
-                self.prepared.environment_texture.use(0)
+                self.prepared.background_texture.use(0)
                 uniforms["u_env"] = 0
                 uniforms["u_env_from_world"] = rotation_y(self.scene.environment.rotate_y).astype(np.float32).tobytes()
             else:

@@ -10,18 +10,11 @@ from ..quantities import MAX_MAGNITUDE
 from .model import EnvironmentLight, Scene
 
 
-def load_environment(scene: Scene, residual: bool = False) -> np.ndarray | None:
-    """The scene's environment image (H, W, 3) float32 times its ``scale``, or None; ``residual``: without the
-    compact emitters the GPU renders as lights when the light says ``emitters = "extract"``
-    (``map_emitters.with_map_emitters``)."""
+def load_environment(scene: Scene) -> np.ndarray | None:
+    """The scene's environment image (H, W, 3) float32 times its ``scale``, or None."""
     light = scene.environment
     if light is None:
         return None
-    if residual and light.emitters == "extract":
-        from .map_emitters import split_map
-
-        load_environment(scene)  # the whole map's checks first
-        return split_map(scene)[1]
     from ..imageio import read_image
 
     index = scene.light.index(light)

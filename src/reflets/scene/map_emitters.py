@@ -93,11 +93,12 @@ def find_emitters(image: np.ndarray, rotate_y: float = 0.0, *, threshold: float 
                   max_solid_angle: float = MAX_SOLID_ANGLE, min_share: float = MIN_SHARE,
                   max_count: int = MAX_COUNT) -> tuple[list[MapEmitter], np.ndarray]:  # fmt: skip
     """The map's compact emitters (module docstring's rule) and the residual map (float32, the image's shape);
-    ``rotate_y``: the environment light's rotation (the emitters' directions are in the world)."""
-    img = np.asarray(image, np.float64)
+    ``rotate_y``: the environment light's rotation (the emitters' directions are in the world). A map whose median
+    is 0 (a black ground over half the sphere) has every lit texel bright: one region too wide, none taken."""
+    img = np.asarray(image, np.float32)
     h, w, _ = img.shape
     omega = np.broadcast_to(row_solid_angles(h, w)[:, None], (h, w))
-    lum = img @ LUMINANCE
+    lum = img.astype(np.float64) @ LUMINANCE
     order = np.argsort(lum, axis=None)
     cumulative = np.cumsum(omega.ravel()[order])
     median = float(lum.ravel()[order][np.searchsorted(cumulative, cumulative[-1] / 2.0)])
@@ -105,62 +106,73 @@ def find_emitters(image: np.ndarray, rotate_y: float = 0.0, *, threshold: float 
     bright = lum > level
     residual = img.copy()
     if not bright.any():
-        return [], residual.astype(np.float32)
-    labels, _ = _regions(bright)
+        return [], residual
+    labels, count = _regions(bright)
+    rows, cols = np.nonzero(bright)  # per bright texel: what an emitter would take, W m⁻² per channel
+    keep = (level / lum[rows, cols])[:, None]
+    taken = img[rows, cols].astype(np.float64) * (1.0 - keep) * omega[rows, cols][:, None]
+    region = labels[rows, cols]
+    solid = np.bincount(region, omega[rows, cols], minlength=count + 1)  # one pass over the bright texels
+    power = np.stack([np.bincount(region, taken[:, c], minlength=count + 1) for c in range(3)], axis=-1)
+    given = power @ LUMINANCE
     total = float(np.sum(lum * omega))
-    keep = np.where(bright, level / np.maximum(lum, 1e-300), 1.0)[..., None]
-    taken = img * (1.0 - keep) * omega[..., None]  # per texel, per channel: what an emitter would take
-    u = (np.arange(w) + 0.5) / w
-    v = (np.arange(h) + 0.5) / h
-    directions = equirect_direction(u[None, :], v[:, None])
-    candidates = []
-    for k in np.unique(labels[labels > 0]):
-        region = labels == k
-        solid = float(omega[region].sum())
-        power = taken[region].sum(axis=0)
-        if solid <= max_solid_angle and float(power @ LUMINANCE) >= min_share * total:
-            candidates.append((float(power @ LUMINANCE), region, solid, power))
-    candidates.sort(key=lambda c: -c[0])
+    chosen = [k for k in np.argsort(-given) if k and solid[k] <= max_solid_angle and given[k] >= min_share * total]
+    directions = equirect_direction((cols + 0.5) / w, (rows + 0.5) / h)
     emitters = []
-    for _, region, solid, power in candidates[:max_count]:
-        weights = (taken[region] @ LUMINANCE)[:, None]
-        local = np.sum(directions[region] * weights, axis=0)
+    for k in chosen[:max_count]:
+        mine = region == k
+        local = np.sum(directions[mine] * (taken[mine] @ LUMINANCE)[:, None], axis=0)
         world = rotation_y(rotate_y) @ (local / np.linalg.norm(local))
-        residual[region] = img[region] * keep[region]
-        emitters.append(MapEmitter(tuple(float(c) for c in world), solid, tuple(float(c) for c in power),
-                                   int(region.sum())))  # fmt: skip
-    return emitters, residual.astype(np.float32)
+        residual[rows[mine], cols[mine]] = img[rows[mine], cols[mine]] * keep[mine].astype(np.float32)
+        emitters.append(MapEmitter(tuple(float(c) for c in world), float(solid[k]),
+                                   tuple(float(c) for c in power[k]), int(mine.sum())))  # fmt: skip
+    return emitters, residual
 
 
-@functools.lru_cache(maxsize=8)
-def _split(path: Path, stamp: tuple, rotate_y: float) -> tuple[tuple[MapEmitter, ...], np.ndarray]:
+@functools.lru_cache(maxsize=4)
+def _split(path: Path, stamp: tuple) -> tuple[tuple[MapEmitter, ...], np.ndarray]:
+    """A map file's emitters in its own frame and its residual (remembered by file: found once a map)."""
     from ..imageio import read_image
 
-    emitters, residual = find_emitters(read_image(path), rotate_y)
+    emitters, residual = find_emitters(read_image(path))
     residual.flags.writeable = False
     return tuple(emitters), residual
 
 
 def split_map(scene: Scene) -> tuple[tuple[MapEmitter, ...], np.ndarray] | None:
-    """The scene's environment map split (its emitters, and the residual map × the light's ``scale``), or None
-    when it has no environment or keeps it whole (``emitters = "keep"``)."""
+    """The scene's environment map split — its emitters in the world (the light's ``rotate_y``) and the residual
+    map × the light's ``scale`` — or None when it has no environment or keeps it whole (``emitters = "keep"``)."""
     light = scene.environment
     if light is None or light.emitters != "extract":
         return None
     path = scene.resolve(light.file)
-    emitters, residual = _split(path, tuple(file_stamp(path) or ()), float(light.rotate_y))
-    return emitters, residual * np.float32(light.scale)
+    emitters, residual = _split(path, tuple(file_stamp(path) or ()))
+    turn = rotation_y(light.rotate_y)
+    turned = tuple(MapEmitter(tuple(float(c) for c in turn @ np.asarray(e.direction)), e.solid_angle, e.power, e.texels)
+                   for e in emitters)  # fmt: skip
+    return turned, residual * np.float32(light.scale)
+
+
+def is_split(scene: Scene) -> bool:
+    """Has the scene's environment had its emitters made lights (:func:`with_map_emitters`)?"""
+    return scene.environment is not None and scene.environment._split
 
 
 def with_map_emitters(scene: Scene) -> Scene:
     """The scene the GPU renders: an environment with ``emitters = "extract"`` gives its compact emitters as
-    directional lights (after the scene's own lights: their indices stay), shadowed as the map is; the map itself
-    is then read as its residual (``load_environment(…, residual=True)``)."""
+    directional lights (after the scene's own lights: their indices stay), shadowed as the map is, and is marked
+    split — the prepared scene then lights by its residual map and shows the whole (a scene prepared without this
+    keeps the whole map, its sun prefiltered). Idempotent."""
+    if is_split(scene):
+        return scene
     split = split_map(scene)
-    if not split:
+    if split is None or not split[0]:
         return scene
     light = scene.environment
-    lights = [DirectionalLight(type="directional", direction=tuple(-c for c in emitter.direction),
-                               irradiance=tuple(c * light.scale for c in emitter.power), shadows=light.shadows)
-              for emitter in split[0]]  # fmt: skip
-    return scene.model_copy(update={"light": [*scene.light, *lights]})
+    marked = light.model_copy()
+    marked._split = True
+    suns = [DirectionalLight(type="directional", direction=tuple(-c for c in emitter.direction),
+                             irradiance=tuple(c * light.scale for c in emitter.power), shadows=light.shadows)
+            for emitter in split[0]]  # fmt: skip
+    lights = [marked if item is light else item for item in scene.light]
+    return scene.model_copy(update={"light": [*lights, *suns]})

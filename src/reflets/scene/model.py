@@ -11,7 +11,17 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import numpy as np
-from pydantic import AfterValidator, BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    PrivateAttr,
+    Tag,
+    field_validator,
+    model_validator,
+)
 
 from ..quantities import Finite, NonNeg, Positive
 
@@ -403,8 +413,11 @@ class EnvironmentLight(Strict):
     rotate_y: Finite = 0.0
     shadows: bool = Field(True, description="occluded by the scene (GPU: shadow maps from 32 directions)")
     emitters: Literal["keep", "extract"] = Field(
-        "extract", description='"extract": the GPU renders the map\'s compact emitters (a sun) as directional lights and '
-        "prefilters the rest (scene.map_emitters); the references always see the whole map")
+        "extract", description='"extract": the GPU renders the map\'s compact emitters (a sun) as directional lights '
+        "and prefilters the rest (scene.map_emitters); the references always see the whole map")
+    #: set on the GPU's copy whose emitters are already lights of its scene (``map_emitters.with_map_emitters``):
+    #: only then is the map lit as its residual — a scene prepared without the split keeps the whole map
+    _split: bool = PrivateAttr(False)
 
 
 LIGHT_MODELS = {

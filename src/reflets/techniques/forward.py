@@ -642,7 +642,7 @@ class Forward(Technique):
     def _draw_background(self, view_proj: np.ndarray) -> None:
         """The environment map along every camera ray (a full-screen triangle at the far plane)."""
         rot = rotation_y(self.scene.environment.rotate_y)
-        self.prepared.environment_texture.use(0)
+        self.prepared.background_texture.use(0)
         # the projection of directions only (the eye moved to the origin): rays without the cancellation of a
         # near-plane point minus the eye in float32
         to_eye = np.eye(4)

@@ -18,6 +18,7 @@ from ..gpu import GLObjects, ProgramSpec, get_program
 from ..scene.environment import load_environment
 from ..scene.geometry import bounding_boxes, mesh_data
 from ..scene.lightmask import load_masks, quad_uv
+from ..scene.map_emitters import is_split, split_map
 from ..scene.meshdata import MeshData
 from ..scene.model import PolygonLight, QuadLight, Scene
 from .ibl import PrefilteredEnvironment
@@ -43,14 +44,15 @@ class PreparedScene:
         #: world-space triangles of every mesh (the content-keyed cache's objects: read-only)
         self.meshes: list[MeshData] = [mesh_data(scene, i) for i in range(len(scene.mesh))]
         self._masks = load_masks(scene)  # by light index in this scene; passes ask by light (``mask_of``)
-        #: the environment map (H, W, 3) float32 × its scale, or None; its texture (repeat in u) or None
-        self.environment = load_environment(scene, residual=True)  # the emitters split off are lights of ``scene``
-        self.environment_texture = None
-        if self.environment is not None:
-            env = self.environment
-            tex = ctx.texture((env.shape[1], env.shape[0]), 3, env.tobytes(), dtype="f4")
-            tex.repeat_x, tex.repeat_y = True, False
-            self.environment_texture = self._own(tex)
+        #: the environment map (H, W, 3) float32 × its scale, or None — its residual when its compact emitters are
+        #: lights of ``scene`` (``map_emitters.with_map_emitters``) —, and its texture (repeat in u) or None: what
+        #: lights (the prefiltered maps, the occlusion views, the scratch lobes' samples)
+        whole = load_environment(scene)
+        self.environment = split_map(scene)[1] if whole is not None and is_split(scene) else whole
+        self.environment_texture = self._env_texture(self.environment)
+        #: what is seen (the background, a mirror's reflection along its direction): the whole map, its sun in it
+        self.background_texture = (self._env_texture(whole) if whole is not self.environment
+                                   else self.environment_texture)  # fmt: skip
         self.emitters = [self._emitter(i, light) for i, light in enumerate(scene.light) if _is_area(light)]
         points = [m.positions for m in self.meshes] + [light.polygon() for light in scene.light if _is_area(light)]
         #: (N, 2, 3) bounding boxes of each mesh and emitter: the camera's automatic near plane
@@ -58,6 +60,13 @@ class PreparedScene:
         self._ibl = None
         #: the lights' shadow maps (every mesh casts)
         self.shadows = ShadowMaps(self, shadow_settings)
+
+    def _env_texture(self, image: np.ndarray | None):
+        if image is None:
+            return None
+        tex = self.ctx.texture((image.shape[1], image.shape[0]), 3, np.ascontiguousarray(image).tobytes(), dtype="f4")
+        tex.repeat_x, tex.repeat_y = True, False
+        return self._own(tex)
 
     def prefiltered_environment(self) -> PrefilteredEnvironment:
         """The environment's prefiltered maps, made when a pass first asks (the GPU prefiltering runs once)."""
