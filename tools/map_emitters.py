@@ -70,6 +70,31 @@ def frame_costs(frames: int = 20) -> str:
     return ", ".join(f"{name} {np.median(t):.1f} ms" for name, t in times.items())
 
 
+def showcase_costs(frames: int = 5) -> str:
+    """The gallery's showcase (60_showcase.toml, under the sky) at 320 × 240, whole map / its sun as a light:
+    median frame times of two persistent renderers drawn in turn."""
+    import time
+
+    from reflets.demo import scene_path
+
+    base = reflets.load_scene(scene_path("60_showcase.toml"))
+    renderers = {}
+    for mode in ("keep", "extract"):
+        lights = [light.model_copy(update={"emitters": mode}) if light.type == "environment" else light
+                  for light in base.light]  # fmt: skip
+        renderers[mode] = reflets.Renderer(base.model_copy(update={"light": lights}), size=(320, 240))
+        renderers[mode].render()
+    times = {mode: [] for mode in renderers}
+    for _ in range(frames):
+        for mode, renderer in renderers.items():
+            start = time.perf_counter()
+            renderer.render()
+            times[mode].append(1e3 * (time.perf_counter() - start))
+    for renderer in renderers.values():
+        renderer.release()
+    return f"whole map {np.median(times['keep']):.0f} ms, sun as a light {np.median(times['extract']):.0f} ms"
+
+
 def errors(make, masks) -> list[str]:
     """Relative MSE of the GPU image with the whole map and with its emitters split off, over each mask."""
     ref = reflets.reference(make("keep"), spp=256, progress=False).image
@@ -98,6 +123,7 @@ def main() -> None:
     keep, extract = errors(lambda mode: floor_scene(hdr, mode), [sphere, floor])
     print(f"kloppenheim_05, sphere / floor: whole map {keep}, emitters as lights {extract}")
     print(f"the sphere on the floor under the sky, 320 × 240, median frame: {frame_costs()}")
+    print(f"the showcase, 320 × 240, median frame: {showcase_costs()}")
 
 
 if __name__ == "__main__":
