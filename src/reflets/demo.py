@@ -20,7 +20,6 @@ from .errors import OutputError
 from .gpu import get_context, gl_info
 from .imageio import write_image
 from .scene import load_scene
-from .scene.map_emitters import with_map_emitters
 from .techniques import get_technique
 from .validation import NotAnalytic, analytic_image, max_relative_error
 
@@ -184,7 +183,7 @@ def _render_entry(ctx, name: str, method: Method, size, out_dir: Path) -> DemoRe
     scene = load_scene(scene_path(name))
     technique = get_technique(method.name)(ctx, **dict(method.params))
     start = time.perf_counter()
-    technique.prepare(with_map_emitters(scene))  # as a Renderer prepares it: a map's sun as a light
+    technique.prepare(scene)
     prepare_ms = (time.perf_counter() - start) * 1e3
     image_ms = []
     for _ in range(FRAMES):  # a whole image: all frames of a progressive method, draw only

@@ -224,7 +224,6 @@ def gpu_technique(quick: bool) -> dict:
     import reflets
 
     from ..gpu import get_context
-    from ..scene.map_emitters import with_map_emitters
     from ..techniques import get_technique
 
     size = (154, 195) if quick else TABLE_32["size"]
@@ -257,7 +256,7 @@ def gpu_technique(quick: bool) -> dict:
             row = {"pattern": pattern, "layers": count, "size": list(size), "spp": spp}
             try:
                 technique = get_technique("scratches")(get_context())
-                technique.prepare(with_map_emitters(reflets.load_dict(scene)))  # as a Renderer: the sun a light
+                technique.prepare(reflets.load_dict(scene))
                 per_frame = technique.params.samples
                 technique.render(size=size, spp=per_frame)  # compile, upload, warm up
                 technique.timer.wall_ms.clear()

@@ -41,6 +41,7 @@ from ..resources import check, largest_fitting
 from ..scene.emitters import polygon_normal
 from ..scene.geometry import bounding_sphere, mesh_data
 from ..scene.lightmask import quad_uv
+from ..scene.map_emitters import with_map_emitters
 from ..scene.meshdata import MeshData
 from ..scene.model import CylinderMesh, PlaneMesh, PolygonLight, QuadLight, Scene, SphereMesh, TorusMesh
 from ..scene.surfaces import SampledSurface
@@ -257,6 +258,7 @@ class Fermat(Forward):
     auto_order: ClassVar[int] = 3
 
     def prepare(self, scene: Scene) -> None:
+        scene = with_map_emitters(scene)  # as Forward.prepare does: the reflected objects' lights too
         if not any(mesh.reflector for mesh in scene.mesh):
             raise ArgumentError(
                 "the fermat method needs a mesh with reflector = true (and a mirror material)", field="mesh"

@@ -40,6 +40,7 @@ from pydantic import Field
 
 from ..diagnostics import lit_by_constants
 from ..gpu import FrameTimer
+from ..scene.map_emitters import with_map_emitters
 from ..scene.model import PolygonLight, QuadLight, Scene
 from ..techniques.base import Technique, TechniqueParams, add_frame, get_technique, register_technique
 from ..techniques.forward import (
@@ -191,6 +192,7 @@ class Auto(Technique):
 
     def prepare(self, scene: Scene) -> None:
         self.release()
+        scene = with_map_emitters(scene)  # an environment's sun as a light, planned as the scene's own
         self.scene = scene
         plan = pass_plan(scene, self._area_method(scene))
         p = self.params

@@ -30,7 +30,6 @@ from ..diagnostics import warn_scene
 from ..errors import ArgumentError, SceneError
 from ..gpu.context import turn
 from ..scene import Scene, load_dict
-from ..scene.map_emitters import with_map_emitters
 
 #: the transform fields ``set_transform`` takes
 TRANSFORM_FIELDS = ("translate", "rotate", "scale")
@@ -176,7 +175,7 @@ class Renderer:
 
     def _prepare(self) -> None:
         t0 = time.perf_counter()
-        self._technique.prepare(with_map_emitters(self.scene))  # a map's sun as a light, when the scene asks
+        self._technique.prepare(self.scene)
         self._stale = False
         self._accumulated = None
         self.stats["prepare_ms"] = 1e3 * (time.perf_counter() - t0)

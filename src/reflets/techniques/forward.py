@@ -43,6 +43,7 @@ from ..scene.emitters import area_light_samples, polygon_normal
 from ..scene.environment import environment_grid
 from ..scene.geometry import camera_range, mesh_scale
 from ..scene.lightmask import mask_lookup
+from ..scene.map_emitters import with_map_emitters
 from ..scene.meshdata import MeshData
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at
@@ -253,6 +254,7 @@ class Forward(Technique):
     def prepare(self, scene: Scene) -> None:
         ctx = self.ctx
         self.release()
+        scene = with_map_emitters(scene)  # an environment's sun as a light (a composed frame's passes: done already)
         self.scene = scene
         self._objects = []
         self.prepared = (
