@@ -11,6 +11,7 @@ reference) — the numbers of docs/techniques/environment-lighting.md.
 from __future__ import annotations
 
 import tempfile
+import time
 from importlib import resources
 from pathlib import Path
 
@@ -19,7 +20,7 @@ import numpy as np
 import reflets
 from reflets.imageio import read_image
 from reflets.metrics import relmse
-from reflets.scene.map_emitters import find_emitters
+from reflets.scene.map_emitters import emitter_lights, find_emitters
 
 MAPS = {name: str(resources.files("reflets").joinpath("data", "environments", f"{name}.hdr"))
         for name in ("kloppenheim_05_1k", "sky", "studio")}  # fmt: skip
@@ -48,8 +49,6 @@ def floor_scene(hdr: str, emitters: str):
 def frame_costs(frames: int = 20) -> str:
     """Median frame times of persistent renderers drawn in turn (one run: their ratios hold on a shared machine):
     the sphere on the floor under the sky, whole map / its sun as a light, and under one point light."""
-    import time
-
     def floor_under(lights):
         return floor_scene(MAPS["sky"], "keep").model_copy(update={"light": lights})
 
@@ -76,8 +75,6 @@ def frame_costs(frames: int = 20) -> str:
 def showcase_costs(frames: int = 5) -> str:
     """The gallery's showcase (60_showcase.toml, under the sky) at 320 × 240, whole map / its sun as a light:
     median frame times of two persistent renderers drawn in turn."""
-    import time
-
     from reflets.demo import scene_path
 
     base = reflets.load_scene(scene_path("60_showcase.toml"))
@@ -116,20 +113,15 @@ def night(directory: Path) -> None:
     """Many small lamps: GGX spheres under the night map against a 1,024-spp reference — the whole map, the rule's
     emitters (eight at most, each ≥ 1 % of the power), and up to 32 emitters of ≥ 0.2 % (made by hand: the residual
     map and the lights as with_map_emitters makes them)."""
-    from reflets.scene.map_emitters import find_emitters
-
     hdr = night_map(directory / "night.npy")
     emitters, residual = find_emitters(np.load(hdr), max_count=32, min_share=0.002)
     np.save(directory / "night_residual.npy", residual)
-    lights = [{"type": "directional", "direction": [-c for c in e.direction], "irradiance": list(e.power)}
-              for e in emitters]  # fmt: skip
     for alpha in (0.05, 0.3):
         scene = sphere_scene(hdr, alpha, "keep")
         sphere = np.any(reflets.render(scene, method="position") != 0, axis=-1)
         ref = reflets.reference(scene, spp=1024, progress=False).image
         many = sphere_scene(str(directory / "night_residual.npy"), alpha, "keep")
-        many = many.model_copy(update={"light": [*many.light, *reflets.load_dict(
-            {"camera": {"position": [0, 0, 1], "look_at": [0, 0, 0]}, "light": lights}).light]})  # fmt: skip
+        many = many.model_copy(update={"light": [*many.light, *emitter_lights(emitters, many.light[0])]})
         images = {"whole map": reflets.render(scene), "the rule's emitters": reflets.render(sphere_scene(
             hdr, alpha, "extract")), f"{len(emitters)} emitters of ≥ 0.2 %": reflets.render(many)}  # fmt: skip
         found = ", ".join(f"{name} {relmse(image[sphere][None], ref[sphere][None]):.2e}"
@@ -148,11 +140,15 @@ def errors(make, masks) -> list[str]:
 
 
 def main() -> None:
+    find_emitters(read_image(MAPS["sky"]))  # (the first call imports scipy.ndimage)
     for name, hdr in MAPS.items():
-        emitters, _ = find_emitters(read_image(hdr))
+        image = read_image(hdr)
+        start = time.perf_counter()
+        emitters, _ = find_emitters(image)
+        ms = 1e3 * (time.perf_counter() - start)
         found = ", ".join(f"{e.texels} texels, {e.solid_angle:.1e} sr, r = {np.degrees(e.radius):.1f}°"
                           for e in emitters)
-        print(f"{name}: {len(emitters)} emitter(s) {found}")
+        print(f"{name} ({image.shape[1]} × {image.shape[0]}, found in {ms:.1f} ms): {len(emitters)} emitter(s) {found}")
     for name, hdr in MAPS.items():
         for alpha in (0.05, 0.15, 0.3, 0.6):
             sphere = np.any(reflets.render(sphere_scene(hdr, alpha, "keep"), method="position") != 0, axis=-1)

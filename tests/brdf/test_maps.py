@@ -298,7 +298,7 @@ def test_mapped_lobe_shapes_under_lights_and_the_environment_as_the_reference(tm
     from reflets.scene.assets import default_environment
 
     ref = reference_image(lobe_maps_scene(tmp_path, [POINT, QUAD]))
-    assert block_error(lobe_maps_scene(tmp_path, [POINT, QUAD]), ref) < 1e-3  # measured 1.8e-4
+    assert block_error(lobe_maps_scene(tmp_path, [POINT, QUAD]), ref) < 5e-4  # measured 1.8e-4
     assert block_error(lobe_maps_scene(tmp_path, [POINT, QUAD], maps=False), ref) > 0.03  # the maps matter: 0.14
     studio = [{"type": "environment", "file": str(default_environment())}]
     scene = lobe_maps_scene(tmp_path, studio)

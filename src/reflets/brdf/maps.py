@@ -180,7 +180,7 @@ class Mapped(Material):
                     )
             affine = [key for key in maps if key in cls.affine_colours(data)]  # (two at most: A-S's rs and rd)
             lobed = [key for key in maps if key in cls.lobe_maps]
-            if len(affine) > (len(affine) if cls.affine_group else 1) and lobed:
+            if lobed and len(affine) > 1 and not cls.affine_group:
                 raise ValueError(f"{', '.join(affine)} and {', '.join(lobed)} cannot all be textures: with a mapped "
                                  "lobe shape, one affine colour at most (the prefiltered environment's curves at 0 "
                                  "for each would not fit a shader's uniforms)")

@@ -158,11 +158,19 @@ def is_split(scene: Scene) -> bool:
     return scene.environment is not None and scene.environment._split
 
 
+def emitter_lights(emitters, light) -> list[DirectionalLight]:
+    """Emitters of an environment ``light``'s map as directional lights: irradiance their power × its scale,
+    shadowed as the map is."""
+    return [DirectionalLight(type="directional", direction=tuple(-c for c in emitter.direction),
+                             irradiance=tuple(c * light.scale for c in emitter.power), shadows=light.shadows)
+            for emitter in emitters]  # fmt: skip
+
+
 def with_map_emitters(scene: Scene) -> Scene:
-    """The scene the GPU renders: an environment with ``emitters = "extract"`` gives its compact emitters as
-    directional lights (after the scene's own lights: their indices stay), shadowed as the map is, and is marked
-    split — the prepared scene then lights by its residual map and shows the whole (a scene prepared without this
-    keeps the whole map, its sun prefiltered). Idempotent."""
+    """The scene the GPU renders (every technique's ``prepare`` asks for it): an environment with ``emitters =
+    "extract"`` gives its compact emitters as directional lights (after the scene's own lights: their indices stay)
+    and is marked split — the prepared scene then lights by its residual map and shows the whole (one made from a
+    scene without this keeps the whole map, its sun prefiltered). Idempotent."""
     if is_split(scene):
         return scene
     split = split_map(scene)
@@ -171,8 +179,5 @@ def with_map_emitters(scene: Scene) -> Scene:
     light = scene.environment
     marked = light.model_copy()
     marked._split = True
-    suns = [DirectionalLight(type="directional", direction=tuple(-c for c in emitter.direction),
-                             irradiance=tuple(c * light.scale for c in emitter.power), shadows=light.shadows)
-            for emitter in split[0]]  # fmt: skip
     lights = [marked if item is light else item for item in scene.light]
-    return scene.model_copy(update={"light": [*lights, *suns]})
+    return scene.model_copy(update={"light": [*lights, *emitter_lights(split[0], light)]})
