@@ -18,8 +18,10 @@ from pathlib import Path
 import numpy as np
 
 import reflets
+from reflets.equirect import row_solid_angles
 from reflets.imageio import read_image
 from reflets.metrics import relmse
+from reflets.scene.lightmask import LUMINANCE
 from reflets.scene.map_emitters import emitter_lights, find_emitters
 
 MAPS = {name: str(resources.files("reflets").joinpath("data", "environments", f"{name}.hdr"))
@@ -146,8 +148,9 @@ def main() -> None:
         start = time.perf_counter()
         emitters, _ = find_emitters(image)
         ms = 1e3 * (time.perf_counter() - start)
-        found = ", ".join(f"{e.texels} texels, {e.solid_angle:.1e} sr, r = {np.degrees(e.radius):.1f}°"
-                          for e in emitters)
+        total = float(np.sum((image.astype(np.float64) @ LUMINANCE) * row_solid_angles(*image.shape[:2])[:, None]))
+        found = ", ".join(f"{e.texels} texels, {e.solid_angle:.1e} sr, r = {np.degrees(e.radius):.1f}°, "
+                          f"{np.dot(e.power, LUMINANCE) / total:.0%} of the power" for e in emitters)
         print(f"{name} ({image.shape[1]} × {image.shape[0]}, found in {ms:.1f} ms): {len(emitters)} emitter(s) {found}")
     for name, hdr in MAPS.items():
         for alpha in (0.05, 0.15, 0.3, 0.6):

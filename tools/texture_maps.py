@@ -42,16 +42,19 @@ ENV = {"type": "environment", "file": str(default_environment())}
 BOTH = {"point + quad": [POINT, QUAD], "studio map": [ENV]}
 
 
-def compare(kind: str, make, lighting: dict) -> None:
+def compare(kind: str, make, lighting: dict) -> dict:
     """For each lighting: the mapped scene and the factors alone each against its own reference, and the factors
-    alone against the mapped reference (how much the maps change the image). ``make(lights, maps=…)``."""
+    alone against the mapped reference (how much the maps change the image). ``make(lights, maps=…)``. Returns the
+    mapped scenes' references by lighting."""
+    refs = {}
     for name, lights in lighting.items():
         mapped, factors = make(lights, maps=True), make(lights, maps=False)
-        ref = reference_image(mapped)
+        ref = refs[name] = reference_image(mapped)
         print(f"library {kind}, {name}, mapped: {block_error(mapped, ref):.2e}")
         print(f"library {kind}, {name}, unmapped: {block_error(factors):.2e}")
         print(f"library {kind}, {name}, the maps left out, against the mapped reference: "
               f"{block_error(factors, ref):.2e}")  # fmt: skip
+    return refs
 
 
 def main() -> None:
@@ -64,10 +67,9 @@ def main() -> None:
         what = "library lobe shapes (Blinn-Phong, Ward, Ashikhmin-Shirley, Lafortune), point + quad"
         print(f"{what}, mapped: {block_error(scene, ref):.2e}")
         print(f"{what}, Lafortune's maps left out: {block_error(without_maps(scene), ref):.2e}")
-        compare("affine colours", affine_maps_scene, BOTH)
+        refs = compare("affine colours", affine_maps_scene, BOTH)
         for name, lights in BOTH.items():
-            scene = affine_maps_scene(lights)
-            error = block_error(without_maps(scene), reference_image(scene))
+            error = block_error(without_maps(affine_maps_scene(lights)), refs[name])
             print(f"library affine colours, {name}, Lafortune's scale map left out: {error:.2e}")
         for name, light, roughness, engine in (("quad", MARBLE_QUAD, 0.0, "numpy"), ("studio map", ENV, 0.3, "numpy"),
                                                ("point", MARBLE_POINT, 0.0, "volumetric")):  # fmt: skip

@@ -41,13 +41,15 @@ def test_the_sun_is_found_and_the_power_is_kept_exactly():
     assert residual.max() < 100  # the sun's texels keep the threshold's luminance: the map stays continuous
 
 
-def test_a_sun_across_the_seam_is_one_emitter_and_rotate_y_turns_it():
+def test_a_sun_across_the_seam_is_one_emitter_and_rotate_y_turns_it(tmp_path):
     sky = sky_with_sun(column=0)  # columns 255, 0 and 1
     emitters, _ = find_emitters(sky)
     assert len(emitters) == 1 and emitters[0].texels == 9
     u, _ = equirect_uv(np.asarray(emitters[0].direction))
     assert min(u, 1 - u) < 1 / 256
-    turned, _ = find_emitters(sky, rotate_y=90.0)
+    np.save(tmp_path / "sky.npy", sky)
+    turned, _ = split_map(reflets.load_dict({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]}, "light": [
+        {"type": "environment", "file": "sky.npy", "rotate_y": 90.0}]}, base_dir=tmp_path))  # fmt: skip
     x, y, z = emitters[0].direction
     np.testing.assert_allclose(turned[0].direction, (z, y, -x), atol=1e-9)  # R_y(90°) of the direction
 

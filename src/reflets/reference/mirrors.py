@@ -181,15 +181,14 @@ class MirrorBounce:
             rows = idx[sel]
             d = dirs[rows]
             o = origin[rows] if np.ndim(origin) == 2 else np.broadcast_to(origin, d.shape)  # per ray: orthographic
+            uvs = ref.geometry.uv_sets(hits.prim[rows], hits.u[rows], hits.v[rows])  # (a mapped reflectance reads them)
             if isinstance(surface, ParametricReflector):
-                uv = ref.geometry.uv(hits.prim[rows], hits.u[rows], hits.v[rows])
-                x, n = surface.refine(o, d, hits.t[rows], uv)
+                x, n = surface.refine(o, d, hits.t[rows], uvs[:, :2])
                 start = _above_mesh(ref.geometry, hits.prim[rows], o + hits.t[rows, None] * d, x, d)
             else:
                 x, n = surface.refine(o, d, hits.t[rows])
                 start = x + ref.geometry.epsilon * n
             cos = -np.sum(d * n, -1)
             r = d + 2.0 * cos[:, None] * n
-            uv = ref.geometry.uv_sets(hits.prim[rows], hits.u[rows], hits.v[rows])  # a mapped reflectance reads it
-            out[sel] = self.materials[i].specular_reflectance(cos, uv) * ref.trace(start, r, u[rows])
+            out[sel] = self.materials[i].specular_reflectance(cos, uvs) * ref.trace(start, r, u[rows])
         return out

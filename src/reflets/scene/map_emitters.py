@@ -89,11 +89,10 @@ def _regions(bright: np.ndarray) -> tuple[np.ndarray, int]:
     return roots[labels], count
 
 
-def find_emitters(image: np.ndarray, rotate_y: float = 0.0, *, threshold: float = THRESHOLD,
-                  max_solid_angle: float = MAX_SOLID_ANGLE, min_share: float = MIN_SHARE,
-                  max_count: int = MAX_COUNT) -> tuple[list[MapEmitter], np.ndarray]:  # fmt: skip
-    """The map's compact emitters (module docstring's rule) and the residual map (float32, the image's shape);
-    ``rotate_y``: the environment light's rotation (the emitters' directions are in the world). A map whose median
+def find_emitters(image: np.ndarray, *, threshold: float = THRESHOLD, max_solid_angle: float = MAX_SOLID_ANGLE,
+                  min_share: float = MIN_SHARE, max_count: int = MAX_COUNT) -> tuple[list[MapEmitter], np.ndarray]:
+    """The map's compact emitters (module docstring's rule; directions in the map's own frame: ``map_emitters``
+    turns them by the light's ``rotate_y``) and the residual map (float32, the image's shape). A map whose median
     is 0 (a black ground over half the sphere) has every lit texel bright: one region too wide, none taken."""
     img = np.asarray(image, np.float32)
     h, w, _ = img.shape
@@ -122,9 +121,8 @@ def find_emitters(image: np.ndarray, rotate_y: float = 0.0, *, threshold: float 
     for k in chosen[:max_count]:
         mine = region == k
         local = np.sum(directions[mine] * (taken[mine] @ LUMINANCE)[:, None], axis=0)
-        world = rotation_y(rotate_y) @ (local / np.linalg.norm(local))
         residual[rows[mine], cols[mine]] = img[rows[mine], cols[mine]] * keep[mine].astype(np.float32)
-        emitters.append(MapEmitter(tuple(float(c) for c in world), float(solid[k]),
+        emitters.append(MapEmitter(tuple(float(c) for c in local / np.linalg.norm(local)), float(solid[k]),
                                    tuple(float(c) for c in power[k]), int(mine.sum())))  # fmt: skip
     return emitters, residual
 
@@ -139,18 +137,28 @@ def _split(path: Path, stamp: tuple) -> tuple[tuple[MapEmitter, ...], np.ndarray
     return tuple(emitters), residual
 
 
-def split_map(scene: Scene) -> tuple[tuple[MapEmitter, ...], np.ndarray] | None:
-    """The scene's environment map split — its emitters in the world (the light's ``rotate_y``) and the residual
-    map × the light's ``scale`` — or None when it has no environment or keeps it whole (``emitters = "keep"``)."""
+def _split_of(scene: Scene) -> tuple[tuple[MapEmitter, ...], np.ndarray] | None:
     light = scene.environment
     if light is None or light.emitters != "extract":
         return None
     path = scene.resolve(light.file)
-    emitters, residual = _split(path, tuple(file_stamp(path) or ()))
-    turn = rotation_y(light.rotate_y)
-    turned = tuple(MapEmitter(tuple(float(c) for c in turn @ np.asarray(e.direction)), e.solid_angle, e.power, e.texels)
-                   for e in emitters)  # fmt: skip
-    return turned, residual * np.float32(light.scale)
+    return _split(path, tuple(file_stamp(path) or ()))
+
+
+def map_emitters(scene: Scene) -> tuple[MapEmitter, ...]:
+    """The compact emitters of the scene's environment map, in the world (turned by the light's ``rotate_y``); none
+    when it has no environment or keeps it whole (``emitters = "keep"``)."""
+    split = _split_of(scene)
+    turn = rotation_y(scene.environment.rotate_y) if split else None
+    return tuple(MapEmitter(tuple(float(c) for c in turn @ np.asarray(e.direction)), e.solid_angle, e.power, e.texels)
+                 for e in (split[0] if split else ()))  # fmt: skip
+
+
+def split_map(scene: Scene) -> tuple[tuple[MapEmitter, ...], np.ndarray] | None:
+    """The scene's environment map split — its emitters (:func:`map_emitters`) and the residual map × the light's
+    ``scale`` — or None when it has no environment or keeps it whole."""
+    split = _split_of(scene)
+    return None if split is None else (map_emitters(scene), split[1] * np.float32(scene.environment.scale))
 
 
 def is_split(scene: Scene) -> bool:
@@ -171,13 +179,11 @@ def with_map_emitters(scene: Scene) -> Scene:
     "extract"`` gives its compact emitters as directional lights (after the scene's own lights: their indices stay)
     and is marked split — the prepared scene then lights by its residual map and shows the whole (one made from a
     scene without this keeps the whole map, its sun prefiltered). Idempotent."""
-    if is_split(scene):
-        return scene
-    split = split_map(scene)
-    if split is None or not split[0]:
+    emitters = () if is_split(scene) else map_emitters(scene)
+    if not emitters:
         return scene
     light = scene.environment
     marked = light.model_copy()
     marked._split = True
     lights = [marked if item is light else item for item in scene.light]
-    return scene.model_copy(update={"light": [*lights, *emitter_lights(split[0], light)]})
+    return scene.model_copy(update={"light": [*lights, *emitter_lights(emitters, light)]})

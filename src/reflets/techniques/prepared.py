@@ -48,7 +48,7 @@ class PreparedScene:
         #: lights of ``scene`` (``map_emitters.with_map_emitters``) —, and its texture (repeat in u) or None: what
         #: lights (the prefiltered maps, the occlusion views, the scratch lobes' samples)
         whole = load_environment(scene)
-        self.environment = split_map(scene)[1] if whole is not None and is_split(scene) else whole
+        self.environment = split_map(scene)[1] if is_split(scene) else whole
         self.environment_texture = self._env_texture(self.environment)
         #: what is seen (the background, a mirror's reflection along its direction): the whole map, its sun in it
         self.background_texture = (self._env_texture(whole) if whole is not self.environment
