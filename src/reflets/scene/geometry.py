@@ -144,6 +144,54 @@ def bounding_sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
     return centre, float(np.sqrt(np.max(np.sum((points - centre) ** 2, axis=1))))
 
 
+def self_shadowing(positions: np.ndarray, indices: np.ndarray) -> str:
+    """Where a mesh can hide part of itself from a direction its surface faces: ``"none"`` when flat (all in one
+    plane), ``"inside"`` when closed and convex (every triangle on its convex hull's boundary: a ray leaving
+    its outer side leaves the hull; only a point seen from inside the hull can be hidden), else ``"any"``.
+    Exact up to rounding: a triangle whose centroid lies on the hull's boundary lies in the supporting plane
+    there, a facet's through one of its corners (checked against the facets at each corner: linear time)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    positions = np.asarray(positions, np.float64)
+    if not len(positions):
+        return "any"
+    grid = 1e-6 * max(float(np.ptp(positions, axis=0).max()), 1e-30)  # seams' repeated positions (and −0) as one
+    _, first, inverse = np.unique(np.round(positions / grid), axis=0, return_index=True, return_inverse=True)
+    points = positions[first]
+    triangles = inverse.reshape(-1)[np.asarray(indices, np.int64)]
+    triangles = triangles[(triangles[:, 0] != triangles[:, 1]) & (triangles[:, 1] != triangles[:, 2])
+                          & (triangles[:, 2] != triangles[:, 0])]  # fmt: skip
+    if len(points) < 3 or not len(triangles):
+        return "any"
+    centred = points - points.mean(axis=0)
+    size = float(np.max(np.linalg.norm(centred, axis=1)))
+    if size > 0.0 and np.linalg.svd(centred, compute_uv=False)[-1] <= 1e-7 * size * np.sqrt(len(points)):
+        return "none"
+    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    if np.any(np.unique(edges, axis=0, return_counts=True)[1] != 2):
+        return "any"  # open (a bowl's inside can hide itself from outside its hull) or not a manifold
+    try:
+        hull = ConvexHull(points, qhull_options="Qc")  # Qc: the points inside a flat facet, with their facet
+    except QhullError:
+        return "any"
+    # the facets at each point: the simplices' corners and the coplanar points
+    owner = np.concatenate([hull.simplices.ravel(), hull.coplanar[:, 0]])
+    facet = np.concatenate([np.repeat(np.arange(len(hull.simplices)), 3), hull.coplanar[:, 1]])
+    order = np.argsort(owner, kind="stable")
+    owner, facet = owner[order], facet[order]
+    starts = np.searchsorted(owner, np.arange(len(points) + 1))
+    corner = triangles.ravel()
+    counts = starts[corner + 1] - starts[corner]
+    pairs = np.repeat(np.arange(len(corner)) // 3, counts)  # (triangle, facet at one of its corners)
+    offset = np.repeat(starts[corner] - (np.cumsum(counts) - counts), counts)  # pair p: facet[p + its offset]
+    facets = facet[np.arange(len(pairs)) + offset]
+    centroids = points[triangles].mean(axis=1)
+    distance = np.einsum("ij,ij->i", centroids[pairs], hull.equations[facets, :3]) + hull.equations[facets, 3]
+    nearest = np.full(len(triangles), -np.inf)
+    np.maximum.at(nearest, pairs, distance)
+    return "inside" if np.all(nearest >= -1e-6 * size) else "any"
+
+
 def framing_camera(scene: Scene):
     """A camera looking down −z at the scene's meshes, 45° vertical field of view, the bounding sphere filling the
     view (what a glTF file without a camera is shown with)."""

@@ -339,12 +339,15 @@ class Forward(Technique):
         ctx = self.ctx
         shading = shading_for(material, self.shadings)
         spec = self.program_spec if shading is None else shading.program
+        # no caster can hide a view of the environment from this mesh: its occlusion compiled out (exact)
+        unoccluded = {"ENV_VIEWS": 0} if not self.prepared.shadows.environment_occludes(index) else {}
         if shading is None:
-            program = get_program(ctx, self.program_spec, slots=self.slots(material), **self.flags(material))
+            program = get_program(ctx, self.program_spec, slots=self.slots(material),
+                                  **{**self.flags(material), **unoccluded})  # fmt: skip
             uniforms = {**material.uniforms(), **self.material_uniforms(material)}
             own_textures = self.material_textures(material)
         else:
-            flags = {**self.pass_flags(), **material.flags(), **shading.flags(material)}
+            flags = {**self.pass_flags(), **material.flags(), **shading.flags(material), **unoccluded}
             program = get_program(ctx, shading.program, slots=shading.slots(material), **flags)
             uniforms = {**material.uniforms(), **shading.uniforms(material)}
             own_textures = shading.textures(material)
