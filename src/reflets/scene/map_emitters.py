@@ -12,16 +12,17 @@ The rule (:func:`find_emitters`), on luminance Y (Rec. 709) and texel solid angl
 2. bright texels form regions by 8-connectivity (u wraps around);
 3. a region is an emitter when it is compact — at most ``max_solid_angle`` (default 10⁻² sr: a cap of 3.2°) —
    and what it gives the light (step 4) is at least ``min_share`` (1 %) of the map's power Σ Y ω; at most
-   ``max_count`` (8), the most powerful first;
+   ``max_count`` (32), the most powerful first;
 4. each texel of an emitter keeps T of its luminance in the residual map (its colour scaled by T / Y): the map
    stays continuous at the region's edge, and the emitter's power is exactly what was taken, per channel —
    residual + emitters = the map, to rounding (tested). The emitter's direction is its power-weighted mean
    direction, its solid angle its texels'.
 
 An emitter is rendered as a directional light of irradiance Σ (L − L_residual) ω (its power: the cap is small,
-cos θ ≈ 1 over it), shadowed by the cascades — not yet as a cap of its angular size (no penumbra, a highlight
-as sharp as a point's): ``EnvironmentLight.emitters``, "extract" by default ("keep": the whole map prefiltered).
-The references always see the whole map.
+cos θ ≈ 1 over it), shadowed — the two brightest through cascades, the others (a night map's lamps) through one
+view of the whole scene each (``shadows.CASCADED_LIGHTS``) — not yet as a cap of its angular size (no penumbra,
+a highlight as sharp as a point's): ``EnvironmentLight.emitters``, "extract" by default ("keep": the whole map
+prefiltered). The references always see the whole map.
 """
 
 from __future__ import annotations
@@ -43,8 +44,8 @@ THRESHOLD = 64.0
 MAX_SOLID_ANGLE = 1e-2
 #: the smallest share of the map's power an emitter holds
 MIN_SHARE = 0.01
-#: the most emitters taken out of one map
-MAX_COUNT = 8
+#: the most emitters taken out of one map (a night map's lamps: each is a light of the frame)
+MAX_COUNT = 32
 
 
 @dataclass(frozen=True)

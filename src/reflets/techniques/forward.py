@@ -339,8 +339,13 @@ class Forward(Technique):
         ctx = self.ctx
         shading = shading_for(material, self.shadings)
         spec = self.program_spec if shading is None else shading.program
-        # no caster can hide a view of the environment from this mesh: its occlusion compiled out (exact)
-        unoccluded = {"ENV_VIEWS": 0} if not self.prepared.shadows.environment_occludes(index) else {}
+        # no caster can darken this mesh (from a light, from a view of the environment): those lookups compiled out —
+        # for an opaque surface lit from its side only (a see-through or cut-out one shows its inside, light
+        # crosses a transmissive or translucent one: a convex mesh can shadow itself there)
+        shadows = self.prepared.shadows
+        opaque = (shading is None or shading.lit_from_its_side) and not material.see_through and not material.cutout
+        unoccluded = ({} if not opaque else {"SHADOW_VIEWS": 0, "ENV_VIEWS": 0} if not shadows.shadowed(index)
+                      else {"ENV_VIEWS": 0} if not shadows.environment_occludes(index) else {})  # fmt: skip
         if shading is None:
             program = get_program(ctx, self.program_spec, slots=self.slots(material),
                                   **{**self.flags(material), **unoccluded})  # fmt: skip

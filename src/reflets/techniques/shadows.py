@@ -88,15 +88,20 @@ SOFT_SIDE = 4
 #: a direction drawn k times is one view of weight k), one orthographic view each; the environment's light is
 #: weighted by the visible fraction of them (a sun gets its own exact direction: its shadow lands in place)
 ENV_SAMPLES = 32
-#: the environment's occlusion is compiled out of a mesh's draw when no caster can hide any of its views from it
-#: (``ShadowMaps.environment_occludes``), checked in scenes of at most this many meshes (pairs of boxes per view)
-ENV_CULL_MESHES = 16
-#: a box grown by this many texels of the environment's views for that test (what a lookup may see of a caster:
-#: the normal offset, the nearest texel, the rasterised edge)
-ENV_CULL_MARGIN = 4.0
+#: a mesh's draw leaves out the shadow lookups no caster can darken — the environment's occlusion, or every
+#: lookup (``ShadowMaps.environment_occludes``, ``ShadowMaps.shadowed``) —, checked in scenes of at most this many
+#: meshes (pairs of boxes per light and view)
+CULL_MESHES = 16
+#: a box grown by this many texels of a whole-scene view for those tests (what a lookup may see of a caster: the
+#: normal offset, the filter, the rasterised edge)
+CULL_MARGIN = 4.0
 #: a directional light's cascades (Engel 2006; Zhang et al. 2006) when the camera sees part of a large scene: at
 #: most CASCADES views, the last the whole scene's, over depths at most CASCADE_RANGE far / near
 CASCADES, CASCADE_RANGE = 4, 1000.0
+#: only this many directional lights, the brightest (by the luminance of their irradiance), get cascades: a
+#: map's many small lamps (``map_emitters``) each get the whole scene's view alone (the atlas's views share one
+#: resolution: cascades for 30 lamps would coarsen every map of the frame)
+CASCADED_LIGHTS = 2
 
 
 @dataclass(frozen=True)
@@ -142,8 +147,9 @@ class ShadowMaps:
         self.environment_full = 0
         #: shadows.glsl's ``environment_visibility`` uniforms (empty without environment views)
         self.environment_uniforms: dict[str, bytes] = {}
-        self._env_cull = None  # (grown boxes, view directions, self_shadowing per mesh) where that test applies
-        self._occludes: list[bool] = []  # per mesh: environment_occludes for the camera
+        self._cull = None  # (grown boxes, self_shadowing per mesh) where the culling tests apply
+        self._env_directions = np.zeros((0, 3))  # the environment views' directions
+        self._needs: list[tuple[bool, bool]] = []  # per mesh: (environment_occludes, shadowed) for the camera
         views: list[dict] = []
         boxes = [(m.positions.min(axis=0), m.positions.max(axis=0)) for m in prepared.meshes if len(m.positions)]
         if boxes:  # the meshes' bounding-box corners: what the views must hold
@@ -151,6 +157,7 @@ class ShadowMaps:
             centre, radius = bounding_sphere(corners)
             radius = max(radius, 1e-6)
             self._scene_sphere = (centre, radius)
+        self._cascaded = cascaded_lights(scene)
         for index, light in enumerate(scene.light):
             if not getattr(light, "shadows", False) or not boxes:
                 continue
@@ -158,7 +165,7 @@ class ShadowMaps:
             if isinstance(light, PointLight):
                 views += _cube_views(np.asarray(light.position, np.float64), centre, radius)
             elif isinstance(light, DirectionalLight):  # placeholders: a cascade's view snaps to the texel grid
-                spheres = [*cascade_spheres(scene.camera, centre, radius, settings.cascades), (centre, radius)]
+                spheres = [*cascade_spheres(scene.camera, centre, radius, self._cascade_limit(index)), (centre, radius)]
                 self._cascades[index] = (first, len(spheres))
                 views += [None] * len(spheres)
             elif isinstance(light, QuadLight | PolygonLight):
@@ -202,18 +209,17 @@ class ShadowMaps:
         self._nearest.repeat_x = self._nearest.repeat_y = False
         self._columns, self._size = columns, size
         for index, (first, count) in self._cascades.items():
-            views[first : first + count] = self._directional_views(scene.light[index], scene.camera)
+            views[first : first + count] = self._directional_views(index, scene.camera)
         self._views = views
         self.buffer = self._own(ctx.buffer(np.asarray([self._record(k) for k in range(len(views))]).tobytes()))
         if self.environment_views:
             first, count = self.environment_views
             self.environment_uniforms = _environment_uniforms(views[first : first + count], first, columns, size)
-            if len(boxes) == len(prepared.meshes) <= ENV_CULL_MESHES:  # (an empty mesh has no box)
-                env_views = views[first : first + count]
-                margin = ENV_CULL_MARGIN * max(view["texel"] for view in env_views) / self.resolution
-                self._env_cull = (np.array(boxes) + [[-margin], [margin]], np.array([v["point"] for v in env_views]),
-                                  [mesh_self_shadowing(mesh) for mesh in prepared.meshes])  # fmt: skip
-        self._occludes = self._environment_occludes(scene.camera)
+            self._env_directions = np.array([view["point"] for view in views[first : first + count]])
+        if len(boxes) == len(prepared.meshes) <= CULL_MESHES:  # (an empty mesh has no box)
+            margin = CULL_MARGIN * 2.0 * radius / self.resolution
+            self._cull = (np.array(boxes) + [[-margin], [margin]], [mesh_self_shadowing(m) for m in prepared.meshes])
+        self._needs = self._shadow_needs(scene.camera)
         self._casters = [self._caster(prepared, i) for i in range(len(prepared.meshes))]
         # the distinct programs (the depth one, the cut-out variants: a program may serve several meshes)
         self._programs = list({id(caster[0]): caster[0] for caster in self._casters}.values())
@@ -235,11 +241,16 @@ class ShadowMaps:
         uniforms = {k: v for k, v in {**material.uniforms(), "m_base_color_map": CUTOUT_UNIT}.items() if k in program}
         return program, self._own(prepared.vertex_array(program, index)), uniforms, texture
 
-    def _directional_views(self, light, camera) -> list[dict]:
-        """A directional light's views for ``camera``: its cascades (finest first), then the whole scene's."""
+    def _cascade_limit(self, index: int) -> int:
+        """How many views directional light ``index`` may have (``CASCADED_LIGHTS``)."""
+        return self.settings.cascades if index in self._cascaded else 1
+
+    def _directional_views(self, index: int, camera) -> list[dict]:
+        """Directional light ``index``'s views for ``camera``: its cascades (finest first), then the whole
+        scene's."""
         centre, radius = self._scene_sphere
-        direction = np.asarray(light.direction, np.float64)
-        spheres = [*cascade_spheres(camera, centre, radius, self.settings.cascades), (centre, radius)]
+        direction = np.asarray(self.scene.light[index].direction, np.float64)
+        spheres = [*cascade_spheres(camera, centre, radius, self._cascade_limit(index)), (centre, radius)]
         return [
             directional_view(direction, *snap_to_texels(direction, c, r, self.resolution), centre, radius)
             for c, r in spheres[:-1]
@@ -260,38 +271,58 @@ class ShadowMaps:
             ]
         ).astype(np.float32)
 
-    def _environment_occludes(self, camera) -> list[bool]:
-        """Per mesh: can a caster hide one of the environment's views from a point of it the camera sees? No
-        when the ray from its box along each view's direction misses every other mesh's box and the mesh cannot
-        hide itself — flat, or closed and convex with the camera outside its box (geometry.self_shadowing)."""
-        if self._env_cull is None:
-            return [True] * len(self.scene.mesh)
-        boxes, directions, shadowing = self._env_cull
+    def _shadow_needs(self, camera) -> list[tuple[bool, bool]]:
+        """Per mesh: (can a caster hide one of the environment's views from a point of it the camera sees, can
+        one darken it from any light or view at all). Not where each ray from its box towards a light (along a
+        view's direction; to a point light or an area light's corners: the box holding both) misses every other
+        mesh's box and the mesh cannot hide itself — flat, or closed and convex with the camera outside its box
+        (geometry.self_shadowing: a point facing a light it sees from outside a convex hull is not hidden by it)."""
+        if self._cull is None:
+            return [(True, True)] * len(self.scene.mesh)
+        boxes, shadowing = self._cull
         eye = np.asarray(camera.position, np.float64)
-        occludes = []
+        needs = []
         for i, (box, kind) in enumerate(zip(boxes, shadowing, strict=True)):
             inside = bool(np.all(eye >= box[0]) and np.all(eye <= box[1]))
             if kind == "any" or (kind == "inside" and inside):
-                occludes.append(True)
+                needs.append((True, True))
                 continue
             others = [other for j, other in enumerate(boxes) if j != i]
-            occludes.append(any(np.any(swept_box_meets(box, directions, other)) for other in others))
-        return occludes
+            environment = any(np.any(swept_box_meets(box, self._env_directions, other)) for other in others)
+            lights = any(self._light_meets(box, light, others) for index, light in enumerate(self.scene.light)
+                         if index in self._first_view and not isinstance(light, EnvironmentLight))  # fmt: skip
+            needs.append((environment, environment or lights))
+        return needs
+
+    @staticmethod
+    def _light_meets(box: np.ndarray, light, others: list[np.ndarray]) -> bool:
+        """May a ray from ``box`` to the (shadowed) light meet one of the ``others`` boxes?"""
+        if isinstance(light, DirectionalLight):
+            towards = -np.asarray(light.direction, np.float64)[None] / np.linalg.norm(light.direction)
+            return any(bool(swept_box_meets(box, towards, other)[0]) for other in others)
+        corners = np.asarray(light.position, np.float64)[None] if isinstance(light, PointLight) else light.polygon()
+        span = np.array([np.minimum(box[0], corners.min(axis=0)), np.maximum(box[1], corners.max(axis=0))])
+        return any(bool(np.all(span[0] <= other[1]) and np.all(span[1] >= other[0])) for other in others)
 
     def environment_occludes(self, mesh: int) -> bool:
         """May the environment's views be hidden from some point of mesh ``mesh`` (its index among the prepared
         meshes) that the camera sees? (False: its draw leaves the occlusion out, exactly.)"""
-        return self._occludes[mesh] if mesh < len(self._occludes) else True
+        return self._needs[mesh][0] if mesh < len(self._needs) else True
+
+    def shadowed(self, mesh: int) -> bool:
+        """May any light's or view's shadow fall on a point of mesh ``mesh`` the camera sees? (False: its draw
+        leaves every shadow lookup out, exactly.)"""
+        return self._needs[mesh][1] if mesh < len(self._needs) else True
 
     def set_camera(self, camera) -> bool:
         """Fit the directional lights' cascades to a new camera (their records updated, their tiles drawn again:
         the other views do not depend on the camera); False when a light's number of cascades changes (the
-        atlas's layout with it) or the camera enters or leaves a convex mesh's box (which draws the environment's
-        occlusion): prepare again."""
-        fitted = {index: self._directional_views(self.scene.light[index], camera) for index in self._cascades}
+        atlas's layout with it) or the camera enters or leaves a convex mesh's box (which then draws its shadows):
+        prepare again."""
+        fitted = {index: self._directional_views(index, camera) for index in self._cascades}
         if any(len(views) != self._cascades[index][1] for index, views in fitted.items()):
             return False
-        if self._environment_occludes(camera) != self._occludes:
+        if self._shadow_needs(camera) != self._needs:
             return False
         redraw = []
         for index, views in fitted.items():
@@ -366,6 +397,13 @@ class ShadowMaps:
     def release(self) -> None:
         self._gl.release()
         self.atlas = self.buffer = None
+
+
+def cascaded_lights(scene: Scene) -> set[int]:
+    """The indices of the ``CASCADED_LIGHTS`` brightest shadowed directional lights of a scene."""
+    lights = [(float(np.dot(light.irradiance, LUMINANCE)), index) for index, light in enumerate(scene.light)
+              if isinstance(light, DirectionalLight) and light.shadows]  # fmt: skip
+    return {index for _, index in sorted(lights, key=lambda item: -item[0])[:CASCADED_LIGHTS]}
 
 
 def light_index(scene: Scene, light) -> int | None:

@@ -1,5 +1,6 @@
-"""The environment's occlusion left out of a mesh's draw where no caster can hide any of its views (shadows.py
-``environment_occludes``): the geometry it rests on, where it applies, and that it changes nothing."""
+"""Shadow lookups left out of a mesh's draw where no caster can darken it — the environment's occlusion
+(shadows.py ``environment_occludes``) or every lookup (``shadowed``): the geometry it rests on, where it applies,
+and that it changes nothing."""
 
 from __future__ import annotations
 
@@ -16,13 +17,13 @@ from reflets.techniques.shadows import swept_box_meets
 SKY = {"type": "environment", "file": "../environments/sky.hdr"}
 
 
-def scene_of(meshes: list[dict], position=(0.0, 0.6, 4.0), size=(64, 48)) -> reflets.Scene:
+def scene_of(meshes: list[dict], position=(0.0, 0.6, 4.0), size=(64, 48), light: dict = SKY) -> reflets.Scene:
     return reflets.load_dict(
         {
             "camera": {"position": list(position), "look_at": [0, 0.5, 0], "fov_y": 40, "size": list(size)},
             "materials": {"m": {"type": "microfacet", "alpha": 0.3, "diffuse": [0.4, 0.4, 0.4]}},
             "mesh": [{**mesh, "material": "m"} for mesh in meshes],
-            "light": [SKY],
+            "light": [light],
         },
         base_dir=scene_path("12_ref_sphere_env.toml").parent,
     )
@@ -52,26 +53,29 @@ def test_a_box_swept_along_a_direction_meets_what_lies_ahead():
     np.testing.assert_array_equal(swept_box_meets(box, directions, box + [[0.5, 0.5, 0.5]]), [True] * 6)  # overlap
 
 
-def occludes(scene) -> list[bool]:
+def occludes(scene, shadowed: bool = False) -> list[bool]:
+    """Per mesh: ShadowMaps.environment_occludes (or ``shadowed``)."""
     from reflets.gpu import get_context
     from reflets.scene.map_emitters import with_map_emitters
 
     prepared = PreparedScene(get_context(), with_map_emitters(scene))
     try:
-        return [prepared.shadows.environment_occludes(i) for i in range(len(scene.mesh))]
+        test = prepared.shadows.shadowed if shadowed else prepared.shadows.environment_occludes
+        return [test(i) for i in range(len(scene.mesh))]
     finally:
         prepared.release()
 
 
-def draws_occlusion(scene) -> bool:
-    """Does the forward pass's program for the scene's first mesh look the environment's views up?"""
+def draws_occlusion(scene, uniform: str = "u_env_dir") -> bool:
+    """Does the forward pass's program for the scene's first mesh look the environment's views up (or, with
+    ``uniform = "u_shadow_atlas"``, any shadow map)?"""
     from reflets.gpu import get_context
     from reflets.techniques.forward import Forward
 
     forward = Forward(get_context())
     forward.prepare(scene)
     try:
-        return "u_env_dir" in forward._shaded[0].program
+        return uniform in forward._shaded[0].program
     finally:
         forward.release()
 
@@ -88,7 +92,7 @@ def test_a_convex_mesh_alone_draws_no_occlusion_and_looks_the_same(ctx, monkeypa
     assert not draws_occlusion(alone)
     culled = reflets.render(alone)
     with monkeypatch.context() as patch:
-        patch.setattr(shadows, "ENV_CULL_MESHES", 0)
+        patch.setattr(shadows, "CULL_MESHES", 0)
         assert occludes(alone) == [True]
         assert draws_occlusion(alone)
         looked_up = reflets.render(alone)
@@ -115,3 +119,36 @@ def test_a_camera_entering_a_convex_mesh_prepares_again(ctx):
         renderer.release()
     fresh = reflets.render(outside.model_copy(update={"camera": renderer.scene.camera}))
     np.testing.assert_allclose(moved, fresh, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize("light", [{"type": "point", "position": [1.0, 3.0, 2.0], "intensity": [20, 20, 20]},
+                                   {"type": "directional", "direction": [-0.3, -1.0, -0.2], "irradiance": [3, 3, 3]}])
+def test_a_lit_convex_mesh_alone_draws_no_shadow_lookup(light, ctx, monkeypatch):
+    """A sphere alone under a point or a directional light cannot shadow itself: its draw has no shadow lookup,
+    the same frame as with them (the test off); on a floor, both the floor and the sphere look theirs up."""
+    from reflets.techniques import shadows
+
+    sphere = {"shape": "sphere", "radius": 0.5, "transform": {"translate": [0, 0.5, 0]}}
+    alone = scene_of([sphere], light=light)
+    assert not draws_occlusion(alone, "u_shadow_atlas")
+    culled = reflets.render(alone)
+    with monkeypatch.context() as patch:
+        patch.setattr(shadows, "CULL_MESHES", 0)
+        assert draws_occlusion(alone, "u_shadow_atlas")
+        looked_up = reflets.render(alone)
+    assert relmse(culled, looked_up) < 1e-6
+    on_floor = scene_of([sphere, {"shape": "plane", "size": [6, 6]}], light=light)
+    assert draws_occlusion(on_floor, "u_shadow_atlas")
+    assert occludes(on_floor, shadowed=True) == [True, True]
+
+
+def test_a_see_through_convex_mesh_keeps_its_shadows(ctx):
+    """A blended glTF sphere alone shows its inside through its front, which the front can shadow: its draw keeps
+    its lookups (so do transmissive and cut-out surfaces)."""
+    light = {"type": "directional", "direction": [-0.3, -1.0, -0.2], "irradiance": [3, 3, 3]}
+    scene = scene_of([{"shape": "sphere", "radius": 0.5}], light=light)
+    glass = {"type": "gltf", "base_color": [0.8, 0.8, 0.8, 0.5], "alpha_mode": "blend", "double_sided": True}
+    blended = scene.model_copy(update={"materials": {"m": reflets.load_dict(
+        {"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]}, "materials": {"m": glass}}).materials["m"]}})
+    assert not draws_occlusion(scene, "u_shadow_atlas")
+    assert draws_occlusion(blended, "u_shadow_atlas")
