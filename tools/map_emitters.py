@@ -3,7 +3,7 @@ the whole map prefiltered: what the rule finds in the shipped maps, then GGX sph
 96 × 72) under kloppenheim_05, the sky and the studio map, and a sphere on a floor under kloppenheim_05 (128 × 96),
 each against the NumPy reference (256 spp, the whole map, with visibility); relative MSE over the sphere's (the
 floor's) pixels; the frame's cost under the sky; and a synthetic night map of 30 small lamps (against a 1,024-spp
-reference) — the numbers of docs/techniques/environment-lighting.md.
+reference, and its frame's cost) — the numbers of docs/techniques/environment-lighting.md.
 
     python tools/map_emitters.py
 """
@@ -22,7 +22,7 @@ from reflets.equirect import row_solid_angles
 from reflets.imageio import read_image
 from reflets.metrics import relmse
 from reflets.scene.lightmask import LUMINANCE
-from reflets.scene.map_emitters import emitter_lights, find_emitters
+from reflets.scene.map_emitters import find_emitters
 
 MAPS = {name: str(resources.files("reflets").joinpath("data", "environments", f"{name}.hdr"))
         for name in ("kloppenheim_05_1k", "sky", "studio")}  # fmt: skip
@@ -50,16 +50,18 @@ def floor_scene(hdr: str, emitters: str):
 
 def frame_costs(frames: int = 20) -> str:
     """Median frame times of persistent renderers drawn in turn (one run: their ratios hold on a shared machine):
-    the sphere on the floor under the sky, whole map / its sun as a light, and under one point light."""
+    the sphere on the floor under the sky, whole map / its sun as a light (and the residual map unoccluded: what
+    the occlusion's lookups cost), and under one point light."""
     def floor_under(lights):
         return floor_scene(MAPS["sky"], "keep").model_copy(update={"light": lights})
 
     sky = floor_scene(MAPS["sky"], "keep").light[0]
     point = reflets.load_dict({"camera": {"position": [0, 0, 1], "look_at": [0, 0, 0]},
                                "light": [{"type": "point", "position": [2, 3, 4], "intensity": [20, 20, 20]}]}).light
-    scenes = {"whole map": floor_under([sky]), "sun as a light": floor_under([sky.model_copy(update={"emitters":
-              "extract"})]), "one point light": floor_under(point)}  # fmt: skip
-    renderers = {name: reflets.Renderer(scene, size=(320, 240)) for name, scene in scenes.items()}
+    split = floor_under([sky.model_copy(update={"emitters": "extract"})])
+    scenes = {"whole map": (floor_under([sky]), {}), "sun as a light": (split, {}), "the residual unoccluded": (
+              split, {"environment_occlusion": "none"}), "one point light": (floor_under(point), {})}  # fmt: skip
+    renderers = {name: reflets.Renderer(scene, size=(320, 240), **params) for name, (scene, params) in scenes.items()}
     times = {name: [] for name in renderers}
     for renderer in renderers.values():
         renderer.render()
@@ -72,6 +74,32 @@ def frame_costs(frames: int = 20) -> str:
     for renderer in renderers.values():
         renderer.release()
     return ", ".join(f"{name} {np.median(t):.1f} ms" for name, t in times.items())
+
+
+def culling_costs(frames: int = 15) -> str:
+    """A GGX sphere (α 0.15) alone under kloppenheim_05 at 320 × 240, its shadow lookups compiled out (the default:
+    nothing can shadow it) and kept (shadows.CULL_MESHES = 0 while its renderer prepares): median frames, drawn in
+    turn."""
+    from reflets.techniques import shadows
+
+    scene = sphere_scene(MAPS["kloppenheim_05_1k"], 0.15, "extract")
+    culled = reflets.Renderer(scene, size=(320, 240))
+    default, shadows.CULL_MESHES = shadows.CULL_MESHES, 0
+    try:
+        kept = reflets.Renderer(scene, size=(320, 240))
+    finally:
+        shadows.CULL_MESHES = default
+    times = {"compiled out": [], "kept": []}
+    for renderer in (culled, kept):
+        renderer.render()
+    for _ in range(frames):
+        for name, renderer in (("compiled out", culled), ("kept", kept)):
+            start = time.perf_counter()
+            renderer.render()
+            times[name].append(1e3 * (time.perf_counter() - start))
+    culled.release()
+    kept.release()
+    return ", ".join(f"lookups {name} {np.median(t):.1f} ms" for name, t in times.items())
 
 
 def showcase_costs(frames: int = 5) -> str:
@@ -112,23 +140,32 @@ def night_map(path: Path) -> str:
 
 
 def night(directory: Path) -> None:
-    """Many small lamps: GGX spheres under the night map against a 1,024-spp reference — the whole map, the rule's
-    emitters (eight at most, each ≥ 1 % of the power), and up to 32 emitters of ≥ 0.2 % (made by hand: the residual
-    map and the lights as with_map_emitters makes them)."""
+    """Many small lamps: GGX spheres under the night map against a 1,024-spp reference — the whole map and the
+    rule's emitters (each a light) —, and the frame's cost at 320 × 240 both ways."""
     hdr = night_map(directory / "night.npy")
-    emitters, residual = find_emitters(np.load(hdr), max_count=32, min_share=0.002)
-    np.save(directory / "night_residual.npy", residual)
+    print(f"night map: the rule finds {len(find_emitters(np.load(hdr))[0])} of its 30 lamps")
     for alpha in (0.05, 0.3):
         scene = sphere_scene(hdr, alpha, "keep")
         sphere = np.any(reflets.render(scene, method="position") != 0, axis=-1)
         ref = reflets.reference(scene, spp=1024, progress=False).image
-        many = sphere_scene(str(directory / "night_residual.npy"), alpha, "keep")
-        many = many.model_copy(update={"light": [*many.light, *emitter_lights(emitters, many.light[0])]})
         images = {"whole map": reflets.render(scene), "the rule's emitters": reflets.render(sphere_scene(
-            hdr, alpha, "extract")), f"{len(emitters)} emitters of ≥ 0.2 %": reflets.render(many)}  # fmt: skip
+            hdr, alpha, "extract"))}  # fmt: skip
         found = ", ".join(f"{name} {relmse(image[sphere][None], ref[sphere][None]):.2e}"
                           for name, image in images.items())
         print(f"night map (30 lamps), GGX α {alpha}: {found}")
+    costs = {}
+    for mode in ("keep", "extract"):
+        renderer = reflets.Renderer(sphere_scene(hdr, 0.05, mode), size=(320, 240))
+        renderer.render()
+        times = []
+        for _ in range(9):
+            start = time.perf_counter()
+            renderer.render()
+            times.append(1e3 * (time.perf_counter() - start))
+        renderer.release()
+        costs[mode] = np.median(times)
+    print(f"night map, the sphere at 320 × 240, median frame: whole map {costs['keep']:.1f} ms, "
+          f"its lamps as lights {costs['extract']:.1f} ms")
 
 
 def errors(make, masks) -> list[str]:
@@ -165,6 +202,7 @@ def main() -> None:
     print(f"kloppenheim_05, sphere / floor: whole map {keep}, emitters as lights {extract}")
     print(f"the sphere on the floor under the sky, 320 × 240, median frame: {frame_costs()}")
     print(f"the showcase, 320 × 240, median frame: {showcase_costs()}")
+    print(f"a GGX sphere alone under kloppenheim_05, 320 × 240, median frame: {culling_costs()}")
     with tempfile.TemporaryDirectory() as directory:
         night(Path(directory))
 

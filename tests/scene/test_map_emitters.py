@@ -89,3 +89,34 @@ def test_the_gpu_scene_gets_the_sun_as_a_shadowed_directional_light(tmp_path, ct
     assert reflets.render(scene).max() > 1000  # the sun seen in the background: the whole map is shown
     kept = scene.model_copy(update={"light": [scene.light[0], scene.light[1].model_copy(update={"emitters": "keep"})]})
     assert with_map_emitters(kept) is kept and split_map(kept) is None
+
+
+def test_a_night_map_gives_every_lamp_and_two_of_them_cascades(tmp_path, ctx):
+    """Twelve small lamps of a dark map all become lights (up to MAX_COUNT = 32), each shadowed; only the two
+    brightest directional lights get cascades (shadows.CASCADED_LIGHTS), the others one view of the scene."""
+    from reflets.techniques.prepared import PreparedScene
+    from reflets.techniques.shadows import CASCADED_LIGHTS
+
+    night = np.full((128, 256, 3), 0.02, np.float32)
+    columns = np.arange(12) * 21 + 5
+    for k, column in enumerate(columns):
+        night[30 + 3 * (k % 5), column] = 500.0 + 100.0 * k  # the brightest last
+    np.save(tmp_path / "night.npy", night)
+    emitters, _ = find_emitters(night)
+    assert len(emitters) == 12
+    data = {"camera": {"position": [0, 2, 6], "look_at": [0, 0, 0], "fov_y": 30, "size": [320, 240]},
+            "materials": {"m": {"type": "lambert"}},
+            "mesh": [{"shape": "plane", "size": [100, 100], "material": "m"},
+                     {"shape": "sphere", "material": "m", "transform": {"translate": [0, 1, 0]}}],
+            "light": [{"type": "environment", "file": "night.npy"}]}  # fmt: skip
+    gpu = with_map_emitters(reflets.load_dict(data, base_dir=tmp_path))
+    lamps = [light for light in gpu.light if light.type == "directional"]
+    assert len(lamps) == 12
+    prepared = PreparedScene(ctx, gpu)
+    try:
+        views = [prepared.shadows.cascade_count(lamp) for lamp in lamps]
+    finally:
+        prepared.release()
+    brightest = np.argsort([-lamp.irradiance[0] for lamp in lamps])[:CASCADED_LIGHTS]
+    assert all(views[k] > 1 for k in brightest)  # a large floor seen from afar: cascades
+    assert sorted(views)[: 12 - CASCADED_LIGHTS] == [1] * (12 - CASCADED_LIGHTS)

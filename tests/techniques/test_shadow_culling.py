@@ -36,13 +36,19 @@ def scene_of(meshes: list[dict], position=(0.0, 0.6, 4.0), size=(64, 48), light:
 )  # fmt: skip
 def test_a_mesh_that_cannot_hide_itself_is_told_apart(shape, expected):
     """Flat meshes never hide themselves, closed convex ones only from inside their hull (seams' repeated
-    vertices and −0 merged), a torus anywhere; half a sphere is open (its inside hides itself: "any"), and the
-    winding does not matter."""
+    vertices and −0 merged), a torus anywhere; half a sphere is open (its inside hides itself), a convex mesh
+    wound inwards or with inward normals shows its inside (the shaders turn a back face's normal to the camera),
+    and a tetrahedron with a face doubled back to back is no closed solid."""
     mesh = mesh_data(scene_of([shape]), 0)
-    assert self_shadowing(mesh.positions, mesh.indices) == expected
-    assert self_shadowing(mesh.positions, mesh.indices[:, ::-1]) == expected
+    assert self_shadowing(mesh.positions, mesh.indices, mesh.normals) == expected
     if expected == "inside":
         assert self_shadowing(mesh.positions, mesh.indices[: len(mesh.indices) // 2]) == "any"
+        assert self_shadowing(mesh.positions, mesh.indices[:, ::-1]) == "any"
+        assert self_shadowing(mesh.positions, mesh.indices, -mesh.normals) == "any"
+    corners = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    sides = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])  # a tetrahedron, wound outwards
+    assert self_shadowing(corners, sides) == "inside"
+    assert self_shadowing(corners, np.concatenate([sides[:1], sides[:1, ::-1], sides[1:]])) == "any"
 
 
 def test_a_box_swept_along_a_direction_meets_what_lies_ahead():
@@ -142,9 +148,12 @@ def test_a_lit_convex_mesh_alone_draws_no_shadow_lookup(light, ctx, monkeypatch)
     assert occludes(on_floor, shadowed=True) == [True, True]
 
 
-def test_a_see_through_convex_mesh_keeps_its_shadows(ctx):
-    """A blended glTF sphere alone shows its inside through its front, which the front can shadow: its draw keeps
-    its lookups (so do transmissive and cut-out surfaces)."""
+def test_a_see_through_or_normal_mapped_convex_mesh_keeps_its_shadows(ctx, tmp_path):
+    """A blended glTF sphere alone shows its inside through its front, which the front can shadow; a normal map
+    turns the shading normal past the geometric horizon, where the sphere hides itself: their draws keep their
+    lookups (so do transmissive and cut-out surfaces)."""
+    from reflets.bench.maps import write_bumps
+
     light = {"type": "directional", "direction": [-0.3, -1.0, -0.2], "irradiance": [3, 3, 3]}
     scene = scene_of([{"shape": "sphere", "radius": 0.5}], light=light)
     glass = {"type": "gltf", "base_color": [0.8, 0.8, 0.8, 0.5], "alpha_mode": "blend", "double_sided": True}
@@ -152,3 +161,21 @@ def test_a_see_through_convex_mesh_keeps_its_shadows(ctx):
         {"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]}, "materials": {"m": glass}}).materials["m"]}})
     assert not draws_occlusion(scene, "u_shadow_atlas")
     assert draws_occlusion(blended, "u_shadow_atlas")
+    bumps = str(write_bumps(tmp_path / "bumps.png"))
+    bumpy = {"type": "lambert", "albedo": [0.5, 0.5, 0.5], "normal_map": {"texture": bumps}}
+    bumped = reflets.load_dict({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]}, "materials": {"m": bumpy}})
+    assert draws_occlusion(scene.model_copy(update={"materials": bumped.materials}), "u_shadow_atlas")
+
+
+def test_a_camera_whose_near_plane_cuts_a_convex_mesh_sees_its_inside(ctx):
+    """A closed box the eye is outside of but the near plane cuts (the camera's own ``near``), or any convex mesh
+    under an orthographic camera: its draw keeps its shadow lookups."""
+    room = {"shape": "cube", "transform": {"scale": 2}}
+    light = {"type": "directional", "direction": [-0.3, -1.0, -0.2], "irradiance": [3, 3, 3]}
+    far = scene_of([room], position=(0.0, 0.6, 9.0), light=light)
+    assert occludes(far, shadowed=True) == [False]
+    cut = far.model_copy(update={"camera": far.camera.model_copy(update={"near": 8.5})})
+    assert occludes(cut, shadowed=True) == [True]
+    flat = far.model_copy(update={"camera": far.camera.model_copy(update={"projection": "orthographic",
+                                                                          "ortho_height": 4.0})})
+    assert occludes(flat, shadowed=True) == [True]

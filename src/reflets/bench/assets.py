@@ -32,6 +32,7 @@ from ..reference import reference
 from ..reference.montecarlo import MAX_ADAPTIVE_SPP
 from ..scene.assets import asset_path
 from ..scene.model import DirectionalLight, PointLight, Scene
+from .filament import ensure_filly
 
 #: the lights of the comparison (radiometric; the assets are about a unit across, the camera on +z)
 LIGHTS = (
@@ -150,11 +151,7 @@ def _reflets_times(scene: Scene, positions, **params) -> dict:
 
 def _filament_times(scene: Scene, path: Path, positions, image: Path | None, shadows: bool) -> dict:
     """Filament on the same file, camera path, map and point light (reflets.bench.filament, its own process)."""
-    try:
-        import filly  # noqa: F401
-    except ImportError:
-        print("installing filly (Google Filament for Python) for the comparison: pip install filly", flush=True)
-        subprocess.run([sys.executable, "-m", "pip", "install", "-q", "filly"], check=True)
+    ensure_filly()
     environment = next(light for light in scene.light if light.type == "environment")
     point = next(light for light in scene.light if light.type == "point")
     job = {

@@ -144,12 +144,14 @@ def bounding_sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
     return centre, float(np.sqrt(np.max(np.sum((points - centre) ** 2, axis=1))))
 
 
-def self_shadowing(positions: np.ndarray, indices: np.ndarray) -> str:
+def self_shadowing(positions: np.ndarray, indices: np.ndarray, normals: np.ndarray | None = None) -> str:
     """Where a mesh can hide part of itself from a direction its surface faces: ``"none"`` when flat (all in one
-    plane), ``"inside"`` when closed and convex (every triangle on its convex hull's boundary: a ray leaving
-    its outer side leaves the hull; only a point seen from inside the hull can be hidden), else ``"any"``.
-    Exact up to rounding: a triangle whose centroid lies on the hull's boundary lies in the supporting plane
-    there, a facet's through one of its corners (checked against the facets at each corner: linear time)."""
+    plane), ``"inside"`` when closed and convex with its front sides out — every triangle on its convex hull's
+    boundary, wound counter-clockwise seen from outside, its vertex ``normals`` (if given) on that side: a ray
+    leaving the outer side leaves the hull, only a point seen from inside can be hidden —, else ``"any"`` (a
+    mesh wound inwards too: the shaders turn a back face's normal towards the camera, inwards). Exact up to
+    rounding: a triangle whose centroid lies on the hull's boundary lies in the supporting plane there, a
+    facet's through one of its corners (checked against the facets at each corner: linear time)."""
     from scipy.spatial import ConvexHull, QhullError
 
     positions = np.asarray(positions, np.float64)
@@ -158,15 +160,16 @@ def self_shadowing(positions: np.ndarray, indices: np.ndarray) -> str:
     grid = 1e-6 * max(float(np.ptp(positions, axis=0).max()), 1e-30)  # seams' repeated positions (and −0) as one
     _, first, inverse = np.unique(np.round(positions / grid), axis=0, return_index=True, return_inverse=True)
     points = positions[first]
-    triangles = inverse.reshape(-1)[np.asarray(indices, np.int64)]
-    triangles = triangles[(triangles[:, 0] != triangles[:, 1]) & (triangles[:, 1] != triangles[:, 2])
-                          & (triangles[:, 2] != triangles[:, 0])]  # fmt: skip
+    original = np.asarray(indices, np.int64)
+    triangles = inverse.reshape(-1)[original]
+    kept = np.all(triangles != np.roll(triangles, 1, axis=1), axis=1)  # no two corners merged
+    triangles, original = triangles[kept], original[kept]
     if len(points) < 3 or not len(triangles):
         return "any"
     centred = points - points.mean(axis=0)
     size = float(np.max(np.linalg.norm(centred, axis=1)))
-    if size > 0.0 and np.linalg.svd(centred, compute_uv=False)[-1] <= 1e-7 * size * np.sqrt(len(points)):
-        return "none"
+    if size > 0.0 and np.max(np.abs(centred @ np.linalg.svd(centred, full_matrices=False)[2][-1])) <= 1e-6 * size:
+        return "none"  # every point within 10⁻⁶ of the mesh's size from one plane
     edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
     if np.any(np.unique(edges, axis=0, return_counts=True)[1] != 2):
         return "any"  # open (a bowl's inside can hide itself from outside its hull) or not a manifold
@@ -185,11 +188,19 @@ def self_shadowing(positions: np.ndarray, indices: np.ndarray) -> str:
     pairs = np.repeat(np.arange(len(corner)) // 3, counts)  # (triangle, facet at one of its corners)
     offset = np.repeat(starts[corner] - (np.cumsum(counts) - counts), counts)  # pair p: facet[p + its offset]
     facets = facet[np.arange(len(pairs)) + offset]
-    centroids = points[triangles].mean(axis=1)
+    corners = points[triangles]
+    centroids = corners.mean(axis=1)
     distance = np.einsum("ij,ij->i", centroids[pairs], hull.equations[facets, :3]) + hull.equations[facets, 3]
     nearest = np.full(len(triangles), -np.inf)
     np.maximum.at(nearest, pairs, distance)
-    return "inside" if np.all(nearest >= -1e-6 * size) else "any"
+    if np.any(nearest < -1e-6 * size):
+        return "any"
+    winding = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    if np.any(np.einsum("ij,ij->i", winding, centroids - points[hull.vertices].mean(axis=0)) <= 0.0):
+        return "any"  # a triangle wound inwards (or degenerate)
+    if normals is not None and np.any(np.einsum("ijk,ik->ij", np.asarray(normals, np.float64)[original], winding) <= 0):
+        return "any"  # a vertex normal facing in: that side is the one shaded
+    return "inside"
 
 
 def framing_camera(scene: Scene):

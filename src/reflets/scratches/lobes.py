@@ -49,7 +49,6 @@ class ScratchLobes(MaterialShading):
 
     material_type: ClassVar[type] = Scratched
     program: ClassVar[ProgramSpec] = SCRATCHES_PROGRAM
-    lit_from_its_side: ClassVar[bool] = True
 
     def __init__(self, prepared: PreparedScene, scene, settings: LobeSettings = LobeSettings()):
         self.ctx = prepared.ctx

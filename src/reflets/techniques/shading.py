@@ -21,9 +21,6 @@ class MaterialShading:
     material_type: ClassVar[type]
     #: the mesh program (mesh.vert's vertex layout); its fragment stage includes the material's BRDF slot
     program: ClassVar[ProgramSpec]
-    #: its surfaces are lit from their own side only (no light crosses them): a draw leaves out the shadow lookups
-    #: no caster can darken (forward.py); a translucent material's light crosses it
-    lit_from_its_side: ClassVar[bool] = False
 
     def slots(self, material) -> dict[str, str]:
         return {"BRDF": material.brdf_source}

@@ -42,17 +42,18 @@ from __future__ import annotations
 
 import hashlib
 import math
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Literal
 
 import moderngl
 import numpy as np
 
-from ..cache import Cache
 from ..equirect import equirect_direction, rotation_y, row_solid_angles
 from ..gpu import GLObjects, ProgramSpec, get_program, set_uniforms
 from ..scene.emitters import area_light_samples, polygon_normal
-from ..scene.geometry import bounding_sphere, clip_planes_of_sphere, self_shadowing
+from ..scene.geometry import bounding_sphere, camera_range, clip_planes_of_sphere, self_shadowing
 from ..scene.lightmask import LUMINANCE, mask_lookup
 from ..scene.model import DirectionalLight, EnvironmentLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at, perspective
@@ -147,8 +148,9 @@ class ShadowMaps:
         self.environment_full = 0
         #: shadows.glsl's ``environment_visibility`` uniforms (empty without environment views)
         self.environment_uniforms: dict[str, bytes] = {}
-        self._cull = None  # (grown boxes, self_shadowing per mesh) where the culling tests apply
-        self._env_directions = np.zeros((0, 3))  # the environment views' directions
+        # where the culling tests apply: per mesh its box, self_shadowing, and whether another mesh's box meets
+        # its rays towards the environment's views / towards a shadowed light (``_cull_tests``)
+        self._cull: tuple[np.ndarray, list[str], list[tuple[bool, bool]]] | None = None
         self._needs: list[tuple[bool, bool]] = []  # per mesh: (environment_occludes, shadowed) for the camera
         views: list[dict] = []
         boxes = [(m.positions.min(axis=0), m.positions.max(axis=0)) for m in prepared.meshes if len(m.positions)]
@@ -215,11 +217,13 @@ class ShadowMaps:
         if self.environment_views:
             first, count = self.environment_views
             self.environment_uniforms = _environment_uniforms(views[first : first + count], first, columns, size)
-            self._env_directions = np.array([view["point"] for view in views[first : first + count]])
         if len(boxes) == len(prepared.meshes) <= CULL_MESHES:  # (an empty mesh has no box)
-            margin = CULL_MARGIN * 2.0 * radius / self.resolution
-            self._cull = (np.array(boxes) + [[-margin], [margin]], [mesh_self_shadowing(m) for m in prepared.meshes])
-        self._needs = self._shadow_needs(scene.camera)
+            env = self.environment_views
+            directions = np.array([view["point"] for view in views[env[0] : env[0] + env[1]]] if env else [])
+            boxes = np.array(boxes)
+            self._cull = (boxes, [mesh_self_shadowing(m) for m in prepared.meshes],
+                          self._cull_tests(boxes, directions.reshape(-1, 3), radius))  # fmt: skip
+            self._needs = self._shadow_needs(scene.camera)
         self._casters = [self._caster(prepared, i) for i in range(len(prepared.meshes))]
         # the distinct programs (the depth one, the cut-out variants: a program may serve several meshes)
         self._programs = list({id(caster[0]): caster[0] for caster in self._casters}.values())
@@ -271,38 +275,61 @@ class ShadowMaps:
             ]
         ).astype(np.float32)
 
+    def _cull_tests(self, boxes: np.ndarray, directions: np.ndarray, radius: float) -> list[tuple[bool, bool]]:
+        """Per mesh: may a ray from its box towards one of the environment's views (along its direction) / towards a
+        shadowed light (a direction: the box swept; a point or an area light: the box holding both) meet another
+        mesh's box? Boxes grown by ``CULL_MARGIN`` texels of the views looked up there: a whole-scene view's for
+        directions, a cube face's or a soft-shadow view's at the farthest corner for a point or an area light."""
+        whole = CULL_MARGIN * 2.0 * radius / self.resolution
+        tests = []
+        for i, raw in enumerate(boxes):
+            # both boxes grown: the caster by a lookup's reach, the receiver by the normal offset of its lookups
+            others, box = np.delete(boxes, i, axis=0) + [[-whole], [whole]], raw + [[-whole], [whole]]
+            environment = len(directions) > 0 and any(np.any(swept_box_meets(box, directions, o)) for o in others)
+            lights = environment
+            for index, light in enumerate(self.scene.light):
+                if lights or index not in self._first_view or isinstance(light, EnvironmentLight):
+                    continue
+                if isinstance(light, DirectionalLight):
+                    towards = -np.asarray(light.direction, np.float64)[None] / np.linalg.norm(light.direction)
+                    lights = any(bool(swept_box_meets(box, towards, other)[0]) for other in others)
+                    continue
+                corners = (np.asarray(light.position, np.float64)[None] if isinstance(light, PointLight)
+                           else light.polygon())  # fmt: skip
+                span = np.array([np.minimum(box[0], corners.min(axis=0)), np.maximum(box[1], corners.max(axis=0))])
+                far = float(np.linalg.norm(span[1] - span[0]))  # no receiver is farther from the light
+                texel = (2.0 if isinstance(light, PointLight) else 2.0 * math.tan(math.radians(MAX_ANGLE))) * far
+                margin = CULL_MARGIN * texel / self.resolution
+                span += [[-margin], [margin]]
+                grown = np.delete(boxes, i, axis=0) + [[-margin], [margin]]
+                lights = any(bool(np.all(span[0] <= o[1]) and np.all(span[1] >= o[0])) for o in grown)
+            tests.append((environment, lights))
+        return tests
+
     def _shadow_needs(self, camera) -> list[tuple[bool, bool]]:
         """Per mesh: (can a caster hide one of the environment's views from a point of it the camera sees, can
-        one darken it from any light or view at all). Not where each ray from its box towards a light (along a
-        view's direction; to a point light or an area light's corners: the box holding both) misses every other
-        mesh's box and the mesh cannot hide itself — flat, or closed and convex with the camera outside its box
-        (geometry.self_shadowing: a point facing a light it sees from outside a convex hull is not hidden by it)."""
+        one darken it from any light or view at all). Not where its rays towards them meet no other mesh's box
+        (``_cull_tests``) and the mesh cannot hide itself — flat, or closed and convex, front sides out, with the
+        camera's near plane outside it (geometry.self_shadowing: a point facing a light it sees from outside a
+        convex hull is not hidden by it). An orthographic camera's near plane may cut anything: convex meshes
+        count as open then."""
         if self._cull is None:
             return [(True, True)] * len(self.scene.mesh)
-        boxes, shadowing = self._cull
+        boxes, shadowing, tests = self._cull
         eye = np.asarray(camera.position, np.float64)
+        if camera.orthographic:
+            reach = np.inf
+        else:  # the near plane's corners lie within near × |(x, y, 1)| of the eye, (x, y) the view's half extents
+            tan_y = math.tan(math.radians(camera.fov_y) / 2.0)  # at depth 1 (camera.projection_matrix's)
+            ox, oy = (abs(o) for o in camera.principal_offset)
+            half_x = tan_y * camera.size[0] / camera.size[1] / camera.pixel_aspect * (1.0 + 2.0 * ox)
+            half_y = tan_y * (1.0 + 2.0 * oy)
+            reach = camera_range(camera, boxes)[0] * math.sqrt(1.0 + half_x**2 + half_y**2)
         needs = []
-        for i, (box, kind) in enumerate(zip(boxes, shadowing, strict=True)):
-            inside = bool(np.all(eye >= box[0]) and np.all(eye <= box[1]))
-            if kind == "any" or (kind == "inside" and inside):
-                needs.append((True, True))
-                continue
-            others = [other for j, other in enumerate(boxes) if j != i]
-            environment = any(np.any(swept_box_meets(box, self._env_directions, other)) for other in others)
-            lights = any(self._light_meets(box, light, others) for index, light in enumerate(self.scene.light)
-                         if index in self._first_view and not isinstance(light, EnvironmentLight))  # fmt: skip
-            needs.append((environment, environment or lights))
+        for box, kind, test in zip(boxes, shadowing, tests, strict=True):
+            cut = bool(np.all(eye >= box[0] - reach) and np.all(eye <= box[1] + reach))
+            needs.append((True, True) if kind == "any" or (kind == "inside" and cut) else test)
         return needs
-
-    @staticmethod
-    def _light_meets(box: np.ndarray, light, others: list[np.ndarray]) -> bool:
-        """May a ray from ``box`` to the (shadowed) light meet one of the ``others`` boxes?"""
-        if isinstance(light, DirectionalLight):
-            towards = -np.asarray(light.direction, np.float64)[None] / np.linalg.norm(light.direction)
-            return any(bool(swept_box_meets(box, towards, other)[0]) for other in others)
-        corners = np.asarray(light.position, np.float64)[None] if isinstance(light, PointLight) else light.polygon()
-        span = np.array([np.minimum(box[0], corners.min(axis=0)), np.maximum(box[1], corners.max(axis=0))])
-        return any(bool(np.all(span[0] <= other[1]) and np.all(span[1] >= other[0])) for other in others)
 
     def environment_occludes(self, mesh: int) -> bool:
         """May the environment's views be hidden from some point of mesh ``mesh`` (its index among the prepared
@@ -317,12 +344,12 @@ class ShadowMaps:
     def set_camera(self, camera) -> bool:
         """Fit the directional lights' cascades to a new camera (their records updated, their tiles drawn again:
         the other views do not depend on the camera); False when a light's number of cascades changes (the
-        atlas's layout with it) or the camera enters or leaves a convex mesh's box (which then draws its shadows):
-        prepare again."""
+        atlas's layout with it) or the near plane's reach enters or leaves a convex mesh's box (which then draws
+        its shadows): prepare again."""
         fitted = {index: self._directional_views(index, camera) for index in self._cascades}
         if any(len(views) != self._cascades[index][1] for index, views in fitted.items()):
             return False
-        if self._shadow_needs(camera) != self._needs:
+        if self._cull is not None and self._shadow_needs(camera) != self._needs:
             return False
         redraw = []
         for index, views in fitted.items():
@@ -452,15 +479,31 @@ def swept_box_meets(box: np.ndarray, directions: np.ndarray, other: np.ndarray) 
     return np.maximum(start.max(axis=1), 0.0) <= end.min(axis=1)
 
 
-#: geometry.self_shadowing per mesh content (a convex hull: 0.1–0.4 s for a 65,000-triangle sphere)
-SHADOWING = Cache("shadowing", lambda path: str(np.load(path)["kind"]), lambda kind, path: np.savez(path, kind=kind))
+#: geometry.self_shadowing of the meshes last asked for, by content (a convex hull: 0.1–0.4 s for a
+#: 65,000-triangle sphere); renderers on several threads share it
+_SHADOWING: OrderedDict[bytes, str] = OrderedDict()
+_SHADOWING_SIZE = 256
+_SHADOWING_LOCK = threading.Lock()
 
 
 def mesh_self_shadowing(mesh) -> str:
-    """geometry.self_shadowing of a prepared mesh, remembered by its content."""
-    digest = hashlib.blake2b(np.ascontiguousarray(mesh.positions).tobytes(), digest_size=16)
-    digest.update(np.ascontiguousarray(mesh.indices).tobytes())
-    return SHADOWING.get(f"v1-{digest.hexdigest()}", lambda: self_shadowing(mesh.positions, mesh.indices))
+    """geometry.self_shadowing of a prepared mesh (its normals included), remembered in memory by its content."""
+    digest = hashlib.blake2b(digest_size=16)
+    for array in (mesh.positions, mesh.indices, mesh.normals):
+        digest.update(repr(array.shape).encode())
+        digest.update(np.ascontiguousarray(array).tobytes())
+    key = digest.digest()
+    with _SHADOWING_LOCK:
+        kind = _SHADOWING.get(key)
+        if kind is not None:
+            _SHADOWING.move_to_end(key)
+            return kind
+    kind = self_shadowing(mesh.positions, mesh.indices, mesh.normals)
+    with _SHADOWING_LOCK:
+        _SHADOWING[key] = kind
+        while len(_SHADOWING) > _SHADOWING_SIZE:
+            _SHADOWING.popitem(last=False)
+    return kind
 
 
 def _cube_views(position: np.ndarray, centre: np.ndarray, radius: float) -> list[dict]:
