@@ -2,8 +2,9 @@
 the whole map prefiltered: what the rule finds in the shipped maps, then GGX spheres (F = 0.9, separable masking,
 96 × 72) under kloppenheim_05, the sky and the studio map, and a sphere on a floor under kloppenheim_05 (128 × 96),
 each against the NumPy reference (256 spp, the whole map, with visibility); relative MSE over the sphere's (the
-floor's) pixels; the frame's cost under the sky; and a synthetic night map of 30 small lamps (against a 1,024-spp
-reference, and its frame's cost) — the numbers of docs/techniques/environment-lighting.md.
+floor's) pixels; the frame's cost under the sky; synthetic maps of small lamps — a night of 30 (against a
+1,024-spp reference, and its frame's cost), an interior of 6 with a window —, the culling's and the prefiltering's
+cost: the numbers of docs/techniques/environment-lighting.md.
 
     python tools/map_emitters.py
 """
@@ -59,7 +60,8 @@ def frame_costs(frames: int = 20) -> str:
     point = reflets.load_dict({"camera": {"position": [0, 0, 1], "look_at": [0, 0, 0]},
                                "light": [{"type": "point", "position": [2, 3, 4], "intensity": [20, 20, 20]}]}).light
     split = floor_under([sky.model_copy(update={"emitters": "extract"})])
-    scenes = {"whole map": (floor_under([sky]), {}), "sun as a light": (split, {}), "the residual unoccluded": (
+    scenes = {"whole map": (floor_under([sky]), {}), "sun as a light": (split, {}), "every lookup at every pixel": (
+              split, {"environment_occlusion": "every-pixel"}), "the residual unoccluded": (
               split, {"environment_occlusion": "none"}), "one point light": (floor_under(point), {})}  # fmt: skip
     renderers = {name: reflets.Renderer(scene, size=(320, 240), **params) for name, (scene, params) in scenes.items()}
     times = {name: [] for name in renderers}
@@ -74,6 +76,31 @@ def frame_costs(frames: int = 20) -> str:
     for renderer in renderers.values():
         renderer.release()
     return ", ".join(f"{name} {np.median(t):.1f} ms" for name, t in times.items())
+
+
+def prefilter_cost() -> str:
+    """The GPU's prefiltering of a map (ibl.PrefilteredEnvironment: the GGX mips and the irradiance map), median of
+    three, for the sky (256 × 128) and kloppenheim_05 (1k)."""
+    from reflets.gpu import get_context
+    from reflets.scene.environment import load_environment
+    from reflets.techniques.ibl import PrefilteredEnvironment
+
+    ctx, found = get_context(), []
+    for name in ("sky", "kloppenheim_05_1k"):
+        scene = sphere_scene(MAPS[name], 0.3, "extract")
+        image = load_environment(scene)
+        times = []
+        for _ in range(3):
+            source = ctx.texture((image.shape[1], image.shape[0]), 3, image.tobytes(), dtype="f4")
+            ctx.finish()
+            start = time.perf_counter()
+            maps = PrefilteredEnvironment(source, image, scene.environment)
+            ctx.finish()
+            times.append(1e3 * (time.perf_counter() - start))
+            maps.release()
+            source.release()
+        found.append(f"{name} ({image.shape[1]} × {image.shape[0]}) {np.median(times):.0f} ms")
+    return ", ".join(found)
 
 
 def culling_costs(frames: int = 15) -> str:
@@ -139,11 +166,31 @@ def night_map(path: Path) -> str:
     return str(path)
 
 
-def night(directory: Path) -> None:
-    """Many small lamps: GGX spheres under the night map against a 1,024-spp reference — the whole map and the
-    rule's emitters (each a light) —, and the frame's cost at 320 × 240 both ways."""
-    hdr = night_map(directory / "night.npy")
-    print(f"night map: the rule finds {len(find_emitters(np.load(hdr))[0])} of its 30 lamps")
+def interior_map(path: Path) -> str:
+    """A synthetic interior at 1k: walls (0.2–0.6, a warm floor below the horizon), a window (a 20° × 15° pane of
+    8, too wide to be compact) and 6 small ceiling lamps of 3 × 3 texels (300–900); saved as .npy."""
+    rng = np.random.default_rng(5)
+    h, w = 512, 1024
+    room = np.empty((h, w, 3), np.float32)
+    room[...] = np.linspace(0.2, 0.6, w)[None, :, None] * np.array([1.0, 0.95, 0.9])
+    room[h // 2 :] = (0.25, 0.18, 0.12)
+    room[150:193, 300:357] = (8.0, 8.5, 9.0)  # the window
+    for _ in range(6):
+        row, col = rng.integers(20, 80), rng.integers(0, w)
+        room[row - 1 : row + 2, np.arange(col - 1, col + 2) % w] = np.array([1.0, 0.9, 0.7]) * rng.uniform(300, 900)
+    np.save(path, room)
+    return str(path)
+
+
+def small_lamps(directory: Path) -> None:
+    """The interior's lamps: GGX spheres against a 1,024-spp reference, the whole map and the rule's emitters."""
+    hdr = interior_map(directory / "interior.npy")
+    print(f"interior map: the rule finds {len(find_emitters(np.load(hdr))[0])} emitter(s) (6 lamps, a window)")
+    lamp_errors("interior map", hdr)
+
+
+def lamp_errors(label: str, hdr: str) -> None:
+    """GGX spheres (α 0.05, 0.3) under a map against a 1,024-spp reference: the whole map, the rule's emitters."""
     for alpha in (0.05, 0.3):
         scene = sphere_scene(hdr, alpha, "keep")
         sphere = np.any(reflets.render(scene, method="position") != 0, axis=-1)
@@ -152,7 +199,15 @@ def night(directory: Path) -> None:
             hdr, alpha, "extract"))}  # fmt: skip
         found = ", ".join(f"{name} {relmse(image[sphere][None], ref[sphere][None]):.2e}"
                           for name, image in images.items())
-        print(f"night map (30 lamps), GGX α {alpha}: {found}")
+        print(f"{label}, GGX α {alpha}: {found}")
+
+
+def night(directory: Path) -> None:
+    """Many small lamps: GGX spheres under the night map against a 1,024-spp reference — the whole map and the
+    rule's emitters (each a light) —, and the frame's cost at 320 × 240 both ways."""
+    hdr = night_map(directory / "night.npy")
+    print(f"night map: the rule finds {len(find_emitters(np.load(hdr))[0])} of its 30 lamps")
+    lamp_errors("night map (30 lamps)", hdr)
     costs = {}
     for mode in ("keep", "extract"):
         renderer = reflets.Renderer(sphere_scene(hdr, 0.05, mode), size=(320, 240))
@@ -203,8 +258,10 @@ def main() -> None:
     print(f"the sphere on the floor under the sky, 320 × 240, median frame: {frame_costs()}")
     print(f"the showcase, 320 × 240, median frame: {showcase_costs()}")
     print(f"a GGX sphere alone under kloppenheim_05, 320 × 240, median frame: {culling_costs()}")
+    print(f"prefiltering a map on the GPU: {prefilter_cost()}")
     with tempfile.TemporaryDirectory() as directory:
         night(Path(directory))
+        small_lamps(Path(directory))
 
 
 if __name__ == "__main__":

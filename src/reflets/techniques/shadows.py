@@ -27,6 +27,10 @@ there ``shaders/shadows.glsl`` weights each light by what its shadow views see:
   (θ between the normal and the light) along the normal turned towards the light. No acne on lit surfaces
   (lit floor within 2 % of the reference), and shadows stay attached to their casters.
 
+In a scene of a few meshes (``CULL_MESHES``), a mesh's draw leaves out the lookups no caster can darken
+(``environment_occludes``, ``shadowed``: forward.py compiles them out), tested on boxes and the mesh's convexity
+(``_cull_tests``, ``_shadow_needs``; docs/techniques/shadows.md).
+
 A light with ``shadows = false`` gets no view. All views share one resolution, chosen so that the atlas stays
 within ``MAX_ATLAS`` texels per side (many lights: smaller maps).
 
