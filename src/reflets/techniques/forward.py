@@ -363,7 +363,7 @@ class Forward(Technique):
             uniforms = {**material.uniforms(), **self.material_uniforms(material)}
             own_textures = self.material_textures(material)
         else:
-            flags = {**self.pass_flags(), **material.flags(), **shading.flags(material), **unoccluded}
+            flags = {**self.pass_flags(), **material.flags(), **shading.flags(material)}  # (no culling: not opaque)
             program = get_program(ctx, shading.program, slots=shading.slots(material), **flags)
             uniforms = {**material.uniforms(), **shading.uniforms(material)}
             own_textures = shading.textures(material)
