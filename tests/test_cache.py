@@ -44,3 +44,20 @@ def test_a_read_only_cache_only_costs_the_recomputation(tmp_path, monkeypatch):
     (tmp_path / "ro").mkdir(mode=0o500)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "ro" / "sub"))
     assert _cache(1 << 20).get("k", lambda: np.ones(2)).sum() == 2.0
+
+
+def test_a_memo_keeps_the_most_recently_used_values():
+    from reflets.cache import Memo
+
+    memo, made = Memo(size=2), []
+
+    def make(value):
+        made.append(value)
+        return value
+
+    assert memo.get("a", lambda: make(1)) == 1
+    assert memo.get("b", lambda: make(2)) == 2
+    assert memo.get("a", lambda: make(-1)) == 1  # remembered, and now the most recent
+    assert memo.get("c", lambda: make(3)) == 3  # "b", the least recently used, goes
+    assert len(memo) == 2 and memo.get("b", lambda: make(4)) == 4
+    assert made == [1, 2, 3, 4]

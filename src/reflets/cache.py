@@ -6,7 +6,9 @@
   ``file_stamp`` / ``file_digest`` for the files it reads, ``source_hash`` for the source files it runs;
 - ``Cache(kind, load, save)``: memory first (least recently used out past a byte budget: a long session that
   edits materials does not grow without bound), then the disk (a broken or stale file is recomputed, a
-  read-only disk only costs the recomputation), then ``make`` — stored in both.
+  read-only disk only costs the recomputation), then ``make`` — stored in both;
+- ``Memo(size)``: small values (a number, a word) by key, in memory only, the least recently used out past
+  ``size`` entries.
 """
 
 from __future__ import annotations
@@ -68,6 +70,31 @@ def size_of(value) -> int:
     if hasattr(value, "__dict__"):
         return sum(size_of(v) for v in vars(value).values())
     return 0
+
+
+class Memo:
+    """Small values remembered by key in memory, at most ``size`` of them (least recently used out); renderers on
+    several threads share one (``make`` runs outside the lock: two threads may both make a value)."""
+
+    def __init__(self, size: int = 1024):
+        self.size = size
+        self._values: OrderedDict[object, object] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, key, make: Callable[[], object]):
+        with self._lock:
+            if key in self._values:
+                self._values.move_to_end(key)
+                return self._values[key]
+        value = make()
+        with self._lock:
+            self._values[key] = value
+            while len(self._values) > self.size:
+                self._values.popitem(last=False)
+        return value
+
+    def __len__(self) -> int:
+        return len(self._values)
 
 
 class Cache:

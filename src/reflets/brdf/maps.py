@@ -59,6 +59,7 @@ from typing import ClassVar, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from ..cache import Memo
 from ..textures import FiniteFloat, TextureRef, load_texture, lookup
 from .base import RGB, Material, PointsBRDF, perturbed_frame
 
@@ -93,17 +94,14 @@ def lobe_node_texels() -> np.ndarray:
     return np.linspace(0.0, 1.0, LOBE_NODES) ** 2
 
 
-_EXTREMES: dict[tuple[str, str], float] = {}
+_EXTREMES = Memo()
 
 
 def _red_extreme(data, widest: str) -> float:
     """The largest or smallest R of a decoded texture (remembered by its content key: the reference asks at every
     bounce)."""
-    key = (data.key, widest)
-    if key not in _EXTREMES:
-        red = data.texels[..., 0]
-        _EXTREMES[key] = float(red.max() if widest == "max" else red.min())
-    return _EXTREMES[key]
+    red = data.texels[..., 0]
+    return _EXTREMES.get((data.key, widest), lambda: float(red.max() if widest == "max" else red.min()))
 
 
 class NormalMap(TextureRef):

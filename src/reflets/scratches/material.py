@@ -53,7 +53,7 @@ from ..brdf.measured import Measured
 from ..brdf.microfacet import Microfacet
 from ..brdf.phong import Phong
 from ..brdf.ward import Ward
-from ..cache import Cache, content_key, file_stamp, source_hash
+from ..cache import Cache, Memo, content_key, file_stamp, source_hash
 from ..errors import RefletsError
 from ..quantities import Positive
 
@@ -255,11 +255,10 @@ class Scratched(Oriented, Material):
         """w̄_b = mean over the α map of max(0, 1 − ᾱ): the base's share of the surface (the finite part)."""
         if self.coverage is not None:
             return max(0.0, 1.0 - self.layer_count * self.coverage)
-        key = alpha_key(self)
-        if key not in _BASE_WEIGHTS:  # (the reference asks at every hit: the maps' sum once per set of maps)
-            total = self.alpha_maps().astype(np.float64).sum(axis=0)
-            _BASE_WEIGHTS[key] = float(np.mean(np.maximum(0.0, 1.0 - total)))
-        return _BASE_WEIGHTS[key]
+        def weight() -> float:  # (the reference asks at every hit: the maps' sum once per set of maps)
+            return float(np.mean(np.maximum(0.0, 1.0 - self.alpha_maps().astype(np.float64).sum(axis=0))))
+
+        return _BASE_WEIGHTS.get(alpha_key(self), weight)
 
     # ------------------------------------------------------------------------------------------ evaluation
     def eval(self, wo: np.ndarray, wi: np.ndarray) -> np.ndarray:
@@ -408,7 +407,7 @@ def cached_table(profile: str, fresnel: dict, size: int, rays: int, backend: str
 
 
 #: base_weight by alpha_key
-_BASE_WEIGHTS: dict[str, float] = {}
+_BASE_WEIGHTS = Memo()
 
 
 def alpha_key(material: Scratched) -> str:

@@ -46,14 +46,13 @@ from __future__ import annotations
 
 import hashlib
 import math
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Literal
 
 import moderngl
 import numpy as np
 
+from ..cache import Memo
 from ..equirect import equirect_direction, rotation_y, row_solid_angles
 from ..gpu import GLObjects, ProgramSpec, get_program, set_uniforms
 from ..scene.emitters import area_light_samples, polygon_normal
@@ -484,10 +483,8 @@ def swept_box_meets(box: np.ndarray, directions: np.ndarray, other: np.ndarray) 
 
 
 #: geometry.self_shadowing of the meshes last asked for, by content (a convex hull: 0.1–0.4 s for a
-#: 65,000-triangle sphere); renderers on several threads share it
-_SHADOWING: OrderedDict[bytes, str] = OrderedDict()
-_SHADOWING_SIZE = 256
-_SHADOWING_LOCK = threading.Lock()
+#: 65,000-triangle sphere)
+_SHADOWING = Memo(256)
 
 
 def mesh_self_shadowing(mesh) -> str:
@@ -496,18 +493,7 @@ def mesh_self_shadowing(mesh) -> str:
     for array in (mesh.positions, mesh.indices, mesh.normals):
         digest.update(repr(array.shape).encode())
         digest.update(np.ascontiguousarray(array).tobytes())
-    key = digest.digest()
-    with _SHADOWING_LOCK:
-        kind = _SHADOWING.get(key)
-        if kind is not None:
-            _SHADOWING.move_to_end(key)
-            return kind
-    kind = self_shadowing(mesh.positions, mesh.indices, mesh.normals)
-    with _SHADOWING_LOCK:
-        _SHADOWING[key] = kind
-        while len(_SHADOWING) > _SHADOWING_SIZE:
-            _SHADOWING.popitem(last=False)
-    return kind
+    return _SHADOWING.get(digest.digest(), lambda: self_shadowing(mesh.positions, mesh.indices, mesh.normals))
 
 
 def _cube_views(position: np.ndarray, centre: np.ndarray, radius: float) -> list[dict]:
