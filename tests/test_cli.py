@@ -283,3 +283,16 @@ def test_an_output_never_replaces_an_image_or_buffer_a_gltf_names(capsys, tmp_pa
     assert code == 2 and "own input files" in err and len(err.strip().splitlines()) == 1, err
     assert (tmp_path / "sheen.png").read_bytes() == before
     assert tmp_path / "SheenTest.bin" in reflets.load_scene(tmp_path / "SheenTest.gltf").input_files()
+
+
+def test_bench_refuses_a_results_folder_it_cannot_make_before_running(capsys, tmp_path):
+    """A results folder under a missing one, or a file: one line naming it, exit 2, nothing made (the suite's
+    minutes of work never start)."""
+    target = tmp_path / "missing" / "results"
+    code, _, err = run_cli(capsys, "bench", "ibl", "-o", str(target))
+    assert code == 2 and str(target) in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "missing").exists()
+    existing = tmp_path / "notes.txt"
+    existing.write_text("mine")
+    code, _, err = run_cli(capsys, "bench", "ibl", "-o", str(existing))
+    assert code == 2 and existing.read_text() == "mine"

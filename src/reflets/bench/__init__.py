@@ -62,10 +62,14 @@ def machine() -> dict:
 
 def run_suite(name: str, out_dir: Path, quick: bool = False) -> dict:
     run = suite(name)
+    if not out_dir.parent.is_dir():  # as every command's outputs: its folder must exist (a typo creates nothing)
+        raise OutputError(f"the results folder's parent {out_dir.parent} does not exist", file=out_dir)
     try:
-        out_dir.mkdir(parents=True, exist_ok=True)
+        out_dir.mkdir(exist_ok=True)
     except OSError as exc:
         raise OutputError(f"cannot create the results folder ({exc.strerror})", file=out_dir) from None
+    if not os.access(out_dir, os.W_OK | os.X_OK):  # found now, not after the suite's minutes of work
+        raise OutputError("cannot write the results folder (permission denied)", file=out_dir)
     results, markdown = run(quick, out_dir)
     info = machine()
     results = {"suite": name, "quick": quick, "machine": info, **results}

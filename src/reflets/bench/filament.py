@@ -164,7 +164,21 @@ def spheres(job: dict) -> dict:
     return {"frame_ms": frame_ms, "clipped": clipped, "filly": filly.__version__}
 
 
-if __name__ == "__main__":
-    with open(sys.argv[1], encoding="utf-8") as stream:
-        job = json.load(stream)
+def main(argv: list[str]) -> int:
+    """The benchmarks' subprocess: one JOB.json, one JSON line out; a job it cannot read: one line, exit 2."""
+    try:
+        if len(argv) != 1:
+            raise ValueError("usage: python -m reflets.bench.filament JOB.json")
+        with open(argv[0], encoding="utf-8") as stream:
+            job = json.load(stream)
+        if not isinstance(job, dict):
+            raise ValueError("a job is a JSON object")
+    except (OSError, ValueError, RecursionError) as exc:
+        print(f"reflets.bench.filament: {argv[0] if argv else 'JOB.json'}: {exc}", file=sys.stderr)
+        return 2
     print(json.dumps(spheres(job) if job.get("kind") == "spheres" else run(job)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
