@@ -166,3 +166,15 @@ def test_flip_error_map_is_uint8_rgb(pair):
 
     assert errors.shape == (32, 40, 3) and errors.dtype == np.uint8
     assert errors.max() > errors.min()
+
+
+def test_masked_relmse_weighs_only_the_masked_pixels():
+    from reflets.metrics import masked_relmse
+
+    ref = np.ones((2, 3, 3))
+    test = ref.copy()
+    test[0, 0] = 2.0  # off where the mask is false only
+    mask = np.ones((2, 3), bool)
+    mask[0, 0] = False
+    assert masked_relmse(test, ref, mask) == 0.0
+    assert masked_relmse(test, ref, ~mask) == relmse(test[0, 0][None, None], ref[0, 0][None, None]) > 0.0

@@ -19,20 +19,22 @@ from pathlib import Path
 import numpy as np
 
 import reflets
+from reflets.bench.ibl import CAMERA, GGX
 from reflets.equirect import row_solid_angles
 from reflets.imageio import read_image
-from reflets.metrics import relmse
+from reflets.metrics import masked_relmse
 from reflets.scene.lightmask import LUMINANCE
 from reflets.scene.map_emitters import find_emitters
 
 MAPS = {name: str(resources.files("reflets").joinpath("data", "environments", f"{name}.hdr"))
         for name in ("kloppenheim_05_1k", "sky", "studio")}  # fmt: skip
-GGX = {"type": "microfacet", "fresnel": "none", "specular": [0.9, 0.9, 0.9], "masking": "separable"}
 
 
 def sphere_scene(hdr: str, alpha: float, emitters: str):
+    """``reflets bench ibl``'s GGX sphere (its camera, F = 0.9, separable masking) at 96 × 72 under the map, its
+    emitters extracted or kept."""
     return reflets.load_dict({
-        "camera": {"position": [0, 0.3, 4], "look_at": [0, 0, 0], "fov_y": 35, "size": [96, 72]},
+        "camera": {**CAMERA, "size": [96, 72]},
         "materials": {"m": {**GGX, "alpha": alpha}},
         "mesh": [{"shape": "sphere", "radius": 1, "material": "m"}],
         "light": [{"type": "environment", "file": hdr, "emitters": emitters}],
@@ -197,7 +199,7 @@ def lamp_errors(label: str, hdr: str) -> None:
         ref = reflets.reference(scene, spp=1024, progress=False).image
         images = {"whole map": reflets.render(scene), "the rule's emitters": reflets.render(sphere_scene(
             hdr, alpha, "extract"))}  # fmt: skip
-        found = ", ".join(f"{name} {relmse(image[sphere][None], ref[sphere][None]):.2e}"
+        found = ", ".join(f"{name} {masked_relmse(image, ref, sphere):.2e}"
                           for name, image in images.items())
         print(f"{label}, GGX α {alpha}: {found}")
 
@@ -229,7 +231,7 @@ def errors(make, masks) -> list[str]:
     out = []
     for mode in ("keep", "extract"):
         image = reflets.render(make(mode))
-        out.append(" / ".join(f"{relmse(image[m][None], ref[m][None]):.2e}" for m in masks))
+        out.append(" / ".join(f"{masked_relmse(image, ref, m):.2e}" for m in masks))
     return out
 
 

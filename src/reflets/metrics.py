@@ -70,6 +70,11 @@ def relmse(test: np.ndarray, ref: np.ndarray, eps: float = 1e-2) -> float:
     return float(np.mean(np.square(t - r) / (np.square(r) + eps)))
 
 
+def masked_relmse(test: np.ndarray, ref: np.ndarray, mask: np.ndarray) -> float:
+    """:func:`relmse` over the pixels where ``mask`` (H, W) is true."""
+    return relmse(test[mask][None], ref[mask][None])
+
+
 def psnr(test: np.ndarray, ref: np.ndarray, peak: float | None = None) -> float:
     """Peak signal-to-noise ratio ``10 * log10(peak**2 / MSE)`` in decibels.
 

@@ -78,6 +78,7 @@ def test_the_gpu_scene_gets_the_sun_as_a_shadowed_directional_light(tmp_path, ct
     assert is_split(gpu) and not is_split(scene) and with_map_emitters(gpu) is gpu
     np.testing.assert_allclose(gpu.light[2].irradiance, 0.5 * np.array(sun.power), rtol=1e-6)
     np.testing.assert_allclose(gpu.light[2].direction, -np.array(sun.direction), atol=1e-9)
+    assert gpu.light[2].shadows and gpu.light[2].shadows == scene.light[1].shadows
     whole, rest = load_environment(scene), split_map(scene)[1]
     np.testing.assert_allclose(power(rest) + np.array(gpu.light[2].irradiance), power(whole), rtol=1e-6)
     for prepared_from, lit_by in ((gpu, rest), (scene, whole)):  # prepared without the split: the whole map lights

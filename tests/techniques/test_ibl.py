@@ -38,9 +38,9 @@ def test_ggx_spheres_under_the_sky_match_the_reference(alpha, bound, ctx):
 
 
 def test_a_real_sun_split_off_the_map_is_lit_exactly(ctx):
-    """kloppenheim_05's unclipped sun (65 % of the map's power in 2 × 10⁻⁴ sr) split off as a directional light
-    (``emitters = "extract"``, scene/map_emitters.py) and the rest prefiltered: a sharp GGX sphere (α 0.05, F = 0.9)
-    is far closer to the reference than with the sun prefiltered into the map."""
+    """kloppenheim_05's unclipped sun (65 % of the map's power in 2.4 × 10⁻³ sr, its halo included) split off as a
+    directional light (``emitters = "extract"``, scene/map_emitters.py) and the rest prefiltered: a sharp GGX sphere
+    (α 0.05, F = 0.9) is far closer to the reference than with the sun prefiltered into the map."""
     from importlib import resources
 
     hdr = resources.files("reflets").joinpath("data", "environments", "kloppenheim_05_1k.hdr")

@@ -84,7 +84,7 @@ def run(job: dict) -> dict:
 
 
 #: exposures of a sphere's brackets (× the radiance): filly reads back 8-bit sRGB only, so a linear image is
-#: rebuilt from the brightest unclipped bracket at each pixel (within 1/32 of its value above 1/16 of the range)
+#: rebuilt, at each pixel, from the brightest bracket whose largest channel stays below 0.95
 BRACKETS = (1.0, 1.0 / 16, 1.0 / 256, 1.0 / 4096, 1.0 / 65536)
 
 
@@ -130,10 +130,10 @@ def spheres(job: dict) -> dict:
         unit = 1.2 * 2.0 ** camera.exposure  # the map's intensity that makes a pixel read its radiance
         target = renderer.create_render_target(width=width, height=height)
         timing = renderer.create_render_target(width=job["timing_size"][0], height=job["timing_size"][1])
+        positions, normals = (np.ascontiguousarray(mesh[k], np.float32) for k in ("positions", "normals"))
+        indices = np.ascontiguousarray(mesh["indices"], np.uint32)
         for material in job["materials"]:
             material = {**material, "base_color": [*material["base_color"][:3], 1.0]}  # filly takes RGBA
-            positions, normals = (np.ascontiguousarray(mesh[k], np.float32) for k in ("positions", "normals"))
-            indices = np.ascontiguousarray(mesh["indices"], np.uint32)
             model = scene.create_mesh(positions, indices, normals=normals, **material)
             radiance = None
             for scale in reversed(BRACKETS):  # dimmest first: each brighter bracket replaces what it holds unclipped

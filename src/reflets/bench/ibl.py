@@ -88,18 +88,18 @@ def sphere_mask(scene) -> np.ndarray:
     return binary_erosion(np.any(render(scene, method="position") != 0, axis=-1))
 
 
-def errors(scene, images: dict[str, np.ndarray], spp: int) -> tuple[dict[str, float], float, dict[str, float]]:
+def errors(scene, images: dict[str, np.ndarray], spp: int, mask: np.ndarray) -> tuple[dict[str, float], float,
+                                                                                       dict[str, float]]:
     """relMSE of each image against the scene's reference over the sphere less its rim, the reference's own noise
     (mean of stderr² / (ref² + ε), relmse's weights), and each image's median pixel over the reference's (the sum
     of its channels): how much brighter or darker it is overall."""
-    from ..metrics import relmse
+    from ..metrics import masked_relmse
     from ..reference import reference
 
     result = reference(scene, spp=spp, progress=False)
-    mask = sphere_mask(scene)
     ref = result.image[mask]
     noise = float(np.mean(np.square(result.stderr[mask]) / (np.square(ref) + 1e-2)))
-    found = {name: relmse(image[mask][None], ref[None]) for name, image in images.items()}
+    found = {name: masked_relmse(image, result.image, mask) for name, image in images.items()}
     level = {name: float(np.median(image[mask].sum(-1) / np.maximum(ref.sum(-1), 1e-12))) for name, image in
              images.items()}  # fmt: skip
     return found, noise, level
@@ -153,7 +153,7 @@ def filament_spheres(hdr: str, materials: dict[str, dict], size, timing, frames:
     return images, {"times": times, "clipped": dict(zip(materials, out["clipped"], strict=True)), "filly": out["filly"]}
 
 
-def filament_calibration(size) -> float:
+def filament_calibration(size, mask: np.ndarray) -> float:
     """Filament's mirror sphere (white metal, roughness 0) under a uniform map of 0.5: its median pixel over 0.5
     (1: its read-back gives the radiance)."""
     from ..imageio import write_image
@@ -163,7 +163,6 @@ def filament_calibration(size) -> float:
         write_image(uniform, np.full((64, 128, 3), 0.5, np.float32))
         images, _ = filament_spheres(uniform, {"mirror": {"base_color": [1.0, 1.0, 1.0, 1.0], "metallic": 1.0,
                                                           "roughness": 0.0}}, size, size, 1)  # fmt: skip
-        mask = sphere_mask(sphere_scene({"type": "lambert"}, uniform, size))
     return float(np.median(images["mirror"][mask].mean(-1)) / 0.5)
 
 
@@ -173,7 +172,8 @@ def bench_ibl(quick: bool, out_dir) -> tuple[dict, str]:
 
     size, timing, spp, frames = ((48, 36), (80, 60), 16, 2) if quick else (SIZE, TIMING_SIZE, SPP, FRAMES)
     ensure_filly()
-    calibration = filament_calibration(size)
+    mask = sphere_mask(sphere_scene({"type": "lambert"}, None, size, POINT))  # every row's sphere, one camera
+    calibration = filament_calibration(size, mask)
     if not 0.98 < calibration < 1.02:
         raise RuntimeError(f"Filament's read-back is off: a mirror sphere under a uniform map reads {calibration:.3f}× "
                            "its radiance (1 expected)")  # fmt: skip
@@ -182,7 +182,7 @@ def bench_ibl(quick: bool, out_dir) -> tuple[dict, str]:
         hdr = map_path(map_name)
         for name, (material, bound) in {**SPHERES, **{k: (v, None) for k, v in LIBRARY.items()}}.items():
             scene = sphere_scene(material, hdr, size)
-            found, noise, _ = errors(scene, {"reflets": render(scene)}, spp)
+            found, noise, _ = errors(scene, {"reflets": render(scene)}, spp, mask)
             times = frame_times({"env": sphere_scene(material, hdr, timing),
                                  "point": sphere_scene(material, hdr, timing, POINT)}, frames)  # fmt: skip
             ms = {key: statistics.median(values) for key, values in times.items()}
@@ -197,7 +197,7 @@ def bench_ibl(quick: bool, out_dir) -> tuple[dict, str]:
         for name, gltf in FILAMENT.items():
             material = {"type": "gltf", **gltf}
             scene = sphere_scene(material, hdr, size)
-            found, noise, level = errors(scene, {"reflets": render(scene), "filament": theirs[name]}, spp)
+            found, noise, level = errors(scene, {"reflets": render(scene), "filament": theirs[name]}, spp, mask)
             env_ms = statistics.median(frame_times({"env": sphere_scene(material, hdr, timing)}, frames)["env"])
             filament_rows.append({"map": map_name, "material": name, "relmse": found["reflets"],
                                   "filament_relmse": found["filament"], "reference_noise": noise,

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..demo import scene_path
 from ..diagnostics import RefletsWarning
-from ..metrics import relmse
+from ..metrics import masked_relmse
 
 LIGHTS = {
     "quad": {"type": "quad", "corners": [[0.2, 1.5, -0.4], [1.0, 1.5, -0.4], [0.2, 1.5, 0.4]], "radiance": [6, 6, 6]},
@@ -130,20 +130,15 @@ def _case(obj: str, light_name: str, size, spp: int, frames: int, floor_size: fl
                 "frame_ms": ms,
                 "frame_ms_without_shadows": off_ms,
                 "moving_camera_frame_ms": moving_ms,
-                "floor_relmse": _relmse(image, reference, on_floor),
-                "shadow_relmse": _relmse(image, reference, shadow) if shadow.any() else None,
-                "penumbra_relmse": _relmse(image, reference, penumbra) if penumbra.sum() > 20 else None,
+                "floor_relmse": masked_relmse(image, reference, on_floor),
+                "shadow_relmse": masked_relmse(image, reference, shadow) if shadow.any() else None,
+                "penumbra_relmse": masked_relmse(image, reference, penumbra) if penumbra.sum() > 20 else None,
                 "umbra_mean_ratio": float(image[umbra].mean() / reference[umbra].mean()) if umbra.any() else None,
                 "shadow_pixels": int(shadow.sum()),
                 "penumbra_pixels": int(penumbra.sum()),
             }
         )
     return rows
-
-
-def _relmse(image, reference, mask) -> float:
-    """``reflets.metrics.relmse`` over the pixels of a mask."""
-    return relmse(image[mask][None], reference[mask][None])
 
 
 def _plot(rows: list[dict], path) -> None:

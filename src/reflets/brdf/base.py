@@ -153,6 +153,12 @@ class Material(BaseModel):
         return False
 
     @property
+    def bends_normals(self) -> bool:
+        """A normal map turns its shading normal (light may come from past the geometric horizon: a convex mesh can
+        then shadow itself, forward.py keeps its shadow lookups)."""
+        return False
+
+    @property
     def tabulated(self) -> bool:
         """The area-light methods' per-material integrals (LTC, analytic, biased) stand for it: constant
         parameters, a lobe their tables fit. ``ltc`` reads a textured glTF material per fragment instead

@@ -520,6 +520,10 @@ class Gltf(Material):
     # ------------------------------------------------------------------------------------------ textures
 
     @property
+    def bends_normals(self) -> bool:
+        return self.normal_texture is not None or self.clearcoat_normal_texture is not None
+
+    @property
     def cutout(self) -> bool:
         return self.alpha_mode in ("mask", "blend")
 

@@ -226,6 +226,10 @@ class Mapped(Material):
         return (*(self.maps or {}), *(f for f in SURFACE_MAPS if getattr(self, f) is not None))
 
     @property
+    def bends_normals(self) -> bool:
+        return self.normal_map is not None
+
+    @property
     def textured(self) -> bool:
         return bool(self.brdf_maps)
 

@@ -251,6 +251,10 @@ class Scratched(Oriented, Material):
         """Base level of the α maps, (K, R, R) float32, row 0 at v = 0 (the GL texture's first row)."""
         return cached_alpha(self)
 
+    @property
+    def bends_normals(self) -> bool:
+        return self.base.bends_normals  # the forward pass draws its finite part with the base's normal map
+
     def base_weight(self) -> float:
         """w̄_b = mean over the α map of max(0, 1 − ᾱ): the base's share of the surface (the finite part)."""
         if self.coverage is not None:

@@ -193,16 +193,6 @@ def bind_material_textures(textures: dict) -> dict[str, int]:
     return dict(zip(textures, MATERIAL_UNITS, strict=False))
 
 
-def bends_normals(material) -> bool:
-    """Does a normal map turn the material's shading normal (a library material's, a glTF one's or its coat's, a
-    scratched material's base's: the forward pass draws a scratched material's finite part with its own shading)?"""
-    if any(getattr(material, name, None) is not None for name in ("normal_map", "normal_texture",
-                                                                  "clearcoat_normal_texture")):  # fmt: skip
-        return True
-    base = getattr(material, "base", None)
-    return base is not None and bends_normals(base)
-
-
 @dataclass(frozen=True)
 class PassRole:
     """What a technique draws when a composed frame (``reflets.renderer.compose``) shares the target with
@@ -354,7 +344,7 @@ class Forward(Technique):
         # see-through or cut-out one shows its inside, light crosses a transmissive or translucent one, a normal
         # map or scratches' walls take light from past the geometric horizon: a convex mesh can shadow itself there)
         shadows = self.prepared.shadows
-        opaque = shading is None and not material.see_through and not material.cutout and not bends_normals(material)
+        opaque = shading is None and not material.see_through and not material.cutout and not material.bends_normals
         unoccluded = ({} if not opaque else {"SHADOW_VIEWS": 0, "ENV_VIEWS": 0} if not shadows.shadowed(index)
                       else {"ENV_VIEWS": 0} if not shadows.environment_occludes(index) else {})  # fmt: skip
         if shading is None:

@@ -224,8 +224,11 @@ class ShadowMaps:
             env = self.environment_views
             directions = np.array([view["point"] for view in views[env[0] : env[0] + env[1]]] if env else [])
             boxes = np.array(boxes)
-            self._cull = (boxes, [mesh_self_shadowing(m) for m in prepared.meshes],
-                          self._cull_tests(boxes, directions.reshape(-1, 3), radius))  # fmt: skip
+            tests = self._cull_tests(boxes, directions.reshape(-1, 3), radius)
+            # the convex hull only where the answer matters: a mesh other meshes may shadow keeps its lookups
+            shadowing = [mesh_self_shadowing(mesh) if test != (True, True) else "any"
+                         for mesh, test in zip(prepared.meshes, tests, strict=True)]
+            self._cull = (boxes, shadowing, tests)
             self._needs = self._shadow_needs(scene.camera)
         self._casters = [self._caster(prepared, i) for i in range(len(prepared.meshes))]
         # the distinct programs (the depth one, the cut-out variants: a program may serve several meshes)
@@ -280,9 +283,10 @@ class ShadowMaps:
 
     def _cull_tests(self, boxes: np.ndarray, directions: np.ndarray, radius: float) -> list[tuple[bool, bool]]:
         """Per mesh: may a ray from its box towards one of the environment's views (along its direction) / towards a
-        shadowed light (a direction: the box swept; a point or an area light: the box holding both) meet another
-        mesh's box? Boxes grown by ``CULL_MARGIN`` texels of the views looked up there: a whole-scene view's for
-        directions, a cube face's or a soft-shadow view's at the farthest corner for a point or an area light."""
+        shadowed light or view (a direction: the box swept; a point or an area light: the box holding both; the
+        environment's views included) meet another mesh's box? Boxes grown by ``CULL_MARGIN`` texels of the views
+        looked up there: a whole-scene view's for directions, a cube face's or a soft-shadow view's at the farthest
+        corner for a point or an area light."""
         whole = CULL_MARGIN * 2.0 * radius / self.resolution
         tests = []
         for i, raw in enumerate(boxes):
@@ -349,7 +353,9 @@ class ShadowMaps:
         the other views do not depend on the camera); False when a light's number of cascades changes (the
         atlas's layout with it) or the near plane's reach enters or leaves a convex mesh's box (which then draws
         its shadows): prepare again."""
-        fitted = {index: self._directional_views(index, camera) for index in self._cascades}
+        # (a light without cascades keeps its one whole-scene view: nothing to fit)
+        fitted = {index: self._directional_views(index, camera) for index in self._cascades
+                  if index in self._cascaded}  # fmt: skip
         if any(len(views) != self._cascades[index][1] for index, views in fitted.items()):
             return False
         if self._cull is not None and self._shadow_needs(camera) != self._needs:
