@@ -86,7 +86,7 @@ def main() -> None:
     import tempfile
 
     from reflets.imageio import WRITE_BYTES_PER_PIXEL
-    from reflets.techniques.forward import FRAME_BYTES_PER_SAMPLE
+    from reflets.techniques.base import FRAME_BYTES_PER_SAMPLE
 
     small, large = args.frames
     per_sample = (_run(_FRAME, large) - _run(_FRAME, small)) / (large * large - small * small)

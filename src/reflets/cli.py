@@ -55,7 +55,7 @@ def _check_render_memory(out: Path, size: tuple[int, int]) -> None:
     says 192); a larger spp is checked by the technique, before its target is made."""
     from .imageio import WRITE_BYTES_PER_PIXEL
     from .resources import check, fitting_size
-    from .techniques.forward import FRAME_BYTES_PER_SAMPLE
+    from .techniques.base import FRAME_BYTES_PER_SAMPLE
 
     width, height = size
     per_pixel = FRAME_BYTES_PER_SAMPLE + WRITE_BYTES_PER_PIXEL.get(out.suffix.lower(), 112)

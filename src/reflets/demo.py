@@ -187,10 +187,8 @@ def _render_entry(ctx, name: str, method: Method, size, out_dir: Path) -> DemoRe
     prepare_ms = (time.perf_counter() - start) * 1e3
     image_ms = []
     for _ in range(FRAMES):  # a whole image: all frames of a progressive method, draw only
-        timer = technique.timer
-        timer.wall_ms.clear()
-        timer.gpu_ms.clear()
-        image = technique.render(size=size, spp=method.spp)
+        with technique.timer.measuring() as timer:
+            image = technique.render(size=size, spp=method.spp)
         image_ms.append((sum(timer.gpu_ms), sum(timer.wall_ms)))
     gpu_used = bool(technique.timer.gpu_ms)
     technique.release()

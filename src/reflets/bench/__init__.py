@@ -23,6 +23,7 @@ SUITES: dict[str, str] = {
     "reflections": "reflets.bench.reflections:bench_reflections",
     "scratches": "reflets.bench.scratches:bench_scratches",
     "renderer": "reflets.bench.renderer:bench_renderer",
+    "gpu": "reflets.bench.gpu:bench_gpu",
     "shadows": "reflets.bench.shadows:bench_shadows",
     "ibl": "reflets.bench.ibl:bench_ibl",
     "viewer": "reflets.bench.viewer:bench_viewer",

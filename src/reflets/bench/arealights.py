@@ -82,11 +82,9 @@ def _time_image(technique, size, spp: int, repeats: int) -> float:
     """Median time of a whole image (all of a progressive method's frames), draw only."""
     times = []
     for _ in range(repeats):
-        timer = technique.timer
-        timer.wall_ms.clear()
-        timer.gpu_ms.clear()
-        technique.render(size=size, spp=spp)
-        times.append(sum(timer.gpu_ms) if timer.gpu_ms else sum(timer.wall_ms))
+        with technique.timer.measuring() as timer:
+            technique.render(size=size, spp=spp)
+        times.append(sum(timer.frame_times()))
     return statistics.median(times)
 
 
@@ -242,12 +240,10 @@ def ltc_cost(ctx, size, rounds: int, frames: int = 5) -> dict:
 
 def _frame_times(technique, size, frames: int) -> list[float]:
     """Each frame's time (GPU timer on a real GPU, finish() + wall clock on llvmpipe), draw only."""
-    timer = technique.timer
-    timer.wall_ms.clear()
-    timer.gpu_ms.clear()
-    for _ in range(frames):
-        technique.render(size=size)
-    return list(timer.gpu_ms) if timer.gpu_ms else list(timer.wall_ms)
+    with technique.timer.measuring() as timer:
+        for _ in range(frames):
+            technique.render(size=size)
+    return timer.frame_times()
 
 
 def _cost_markdown(cost: dict, size) -> str:

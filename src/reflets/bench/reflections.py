@@ -102,12 +102,10 @@ def convergence(pairs: int) -> dict:
 
 
 def _frame_ms(technique, size, frames: int) -> float:
-    timer = technique.timer
-    timer.wall_ms.clear()
-    timer.gpu_ms.clear()
-    for _ in range(frames):
-        technique.render(size=size)
-    return statistics.median(timer.gpu_ms or timer.wall_ms)
+    with technique.timer.measuring() as timer:
+        for _ in range(frames):
+            technique.render(size=size)
+    return statistics.median(timer.frame_times())
 
 
 def scene_rows(size, frames: int, ref_spp: int) -> list[dict]:

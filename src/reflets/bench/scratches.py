@@ -259,11 +259,10 @@ def gpu_technique(quick: bool) -> dict:
                 technique.prepare(reflets.load_dict(scene))
                 per_frame = technique.params.samples
                 technique.render(size=size, spp=per_frame)  # compile, upload, warm up
-                technique.timer.wall_ms.clear()
-                technique.timer.gpu_ms.clear()
-                for _ in range(1 if quick else 3):
-                    technique.render(size=size, spp=per_frame)
-                frame_ms = statistics.median(technique.timer.gpu_ms or technique.timer.wall_ms)
+                with technique.timer.measuring() as timer:
+                    for _ in range(1 if quick else 3):
+                        technique.render(size=size, spp=per_frame)
+                frame_ms = statistics.median(timer.frame_times())
                 technique.release()
                 # progressive frames cost the same: an image of spp samples is spp / per_frame frames
                 row.update({"frame_ms": frame_ms, "frames": spp // per_frame, "ms": frame_ms * spp / per_frame})

@@ -172,10 +172,9 @@ def _costs(scene, size, frames: int, settings) -> list[dict]:
     times = {label: [] for label in techniques}
     for _ in range(frames):  # interleaved: every case sees the same machine load
         for label, technique in techniques.items():
-            technique.timer.wall_ms.clear()
-            technique.timer.gpu_ms.clear()
-            technique.render(size=size)
-            times[label].append((technique.timer.gpu_ms or technique.timer.wall_ms)[0])
+            with technique.timer.measuring() as timer:
+                technique.render(size=size)
+            times[label].append(timer.frame_times()[0])
     coverage = float(np.mean(np.any(techniques[cases[0][0]].render(size=size) > 0, axis=-1)))
     rows = []
     for label, technique in techniques.items():
@@ -218,11 +217,10 @@ def _error_row(scene, size, frames: int, ref, compared, params: dict) -> tuple[n
     technique = get_technique("translucent")(get_context(), **params)
     technique.prepare(scene)
     image = technique.render(size=size)
-    technique.timer.wall_ms.clear()
-    technique.timer.gpu_ms.clear()
-    for _ in range(frames):
-        technique.render(size=size)
-    ms = statistics.median(technique.timer.gpu_ms or technique.timer.wall_ms)
+    with technique.timer.measuring() as timer:
+        for _ in range(frames):
+            technique.render(size=size)
+    ms = statistics.median(timer.frame_times())
     technique.release()
     m, noise = compared
     relmse = _relmse(image, ref.image, m)

@@ -29,7 +29,7 @@ reflectors do not appear in reflections. Shadows: the forward pass's shadow maps
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar, Literal
+from typing import ClassVar, Literal, NamedTuple
 
 import moderngl
 import numpy as np
@@ -37,6 +37,7 @@ from pydantic import Field
 
 from ..errors import ArgumentError
 from ..gpu import ProgramSpec, depth, get_program, release_objects, set_uniforms
+from ..gpu.frames import copy_image
 from ..resources import check, largest_fitting
 from ..scene.emitters import polygon_normal
 from ..scene.geometry import bounding_sphere, mesh_data
@@ -61,8 +62,15 @@ REFLECTED_PROGRAM = ProgramSpec(
     "fermat_reflected",
     vertex=SHADERS + "reflected.vert",
     fragment=SHADERS + "reflected.frag",
-    flags=LIGHT_FLAGS | SOLVER_FLAGS | LOBE_FLAGS | {"REFLECTED_EMITTER", "EMITTER_MASK", "SCRATCHED"},
+    flags=LIGHT_FLAGS | LOBE_FLAGS | {"REFLECTED_EMITTER", "EMITTER_MASK", "SCRATCHED"},
     constants=glsl_constants(),
+)
+SOLVE_PROGRAM = ProgramSpec(
+    "fermat_solve",
+    vertex=SHADERS + "solve.vert",
+    flags=SOLVER_FLAGS,
+    constants=glsl_constants(),
+    varyings=("t_mirror",),
 )
 COMPOSITE_PROGRAM = ProgramSpec(
     "fermat_composite",
@@ -248,6 +256,18 @@ class FermatParams(ForwardParams):
     )
 
 
+class _Images(NamedTuple):
+    """A frame's screen images: the G-buffer, each reflector's reflection image (framebuffer, colour) of the
+    reflected meshes that are the same every frame, and a working copy completed each frame (or None)."""
+
+    gbuffer: object
+    position: object
+    normal: object
+    uvs: object
+    reflections: list[tuple]
+    working: tuple | None
+
+
 @register_technique
 class Fermat(Forward):
     """Per-vertex Fermat reflections in smooth curved reflectors (see the module docstring)."""
@@ -256,6 +276,7 @@ class Fermat(Forward):
     summary: ClassVar[str] = "exact reflections in curved mirrors: per-vertex Fermat search on the GPU"
     Params: ClassVar = FermatParams
     auto_order: ClassVar[int] = 3
+    reads_own_images: ClassVar[bool] = True  # each reflection image, composited onto the frame
 
     def prepare(self, scene: Scene) -> None:
         scene = with_map_emitters(scene)  # as Forward.prepare does: the reflected objects' lights too
@@ -301,7 +322,13 @@ class Fermat(Forward):
                 self._reflected_emitters.append((data.subdivided(k), light))
         self._depth_range = 4.0 * bounding_sphere(np.concatenate(points))[1]
         # per reflector: its draws through the solver (vertex arrays bound to that reflector's programs)
-        self._reflection_draws = [self._reflector_draws(r) for r in self._reflectors]
+        self._reflection_draws, self._solve_programs, self._solves = [], [], []
+        for r in self._reflectors:
+            draws, solve_program, solves = self._reflector_draws(r)
+            self._reflection_draws.append(draws)
+            self._solve_programs.append(solve_program)
+            self._solves.append(solves)
+        self._solved: list[tuple | None] = [None] * len(self._reflectors)  # the eye each one's points are for
         self._composites = []
         for r, (_, size) in zip(self._reflectors, bounds, strict=True):
             material = scene.materials[scene.mesh[r.index].material]
@@ -369,9 +396,19 @@ class Fermat(Forward):
             "COUNT_ITERATIONS": int(count),
         }
 
-    def _reflector_draws(self, reflector: Reflector) -> list[tuple]:
+    def _reflector_draws(self, reflector: Reflector) -> tuple[list[tuple], object, list[tuple]]:
+        """(the draws of the meshes and emitters reflected in it, the solver's program, its solves: (vertex array,
+        buffer of the reflection points, vertices) per draw, run by ``_solve``)."""
         ctx = self.ctx
-        solver = self._solver_flags(reflector)
+        solve_program = get_program(ctx, SOLVE_PROGRAM, **self._solver_flags(reflector))
+        solves = []
+
+        def vertex_array(program, data):  # the mesh's buffers, and its reflection points as seen from the eye
+            points = ctx.buffer(reserve=data.n_vertices * 16)
+            self._objects.append(points)
+            solves.append((self.mesh_vertex_array(solve_program, data, indexed=False), points, data.n_vertices))
+            return self.mesh_vertex_array(program, data, extra=((points, "4f", "in_mirror"),))
+
         # every environment lookup: the checkerboard needs the whole 2×2 quad alive, and this pass discards
         light_flags = {**self._light_flags, "ENV_CHECKERBOARD": 0}
         draws = []
@@ -387,7 +424,6 @@ class Fermat(Forward):
                 **light_flags,
                 **material.flags(),
                 **(self._lobes.flags(material) if scratched else {}),
-                **solver,
             )
             uniforms = {**material.uniforms(), **reflector.uniforms()}
             if self._ibl is not None:  # the environment lights reflected objects as in direct view
@@ -396,7 +432,7 @@ class Fermat(Forward):
             if scratched:
                 uniforms.update(self._lobes.uniforms(material))
                 textures = {**textures, **self._lobes.textures(material)}
-            draws.append((program, self.mesh_vertex_array(program, data), uniforms, textures))
+            draws.append((program, vertex_array(program, data), uniforms, textures, scratched))
         masks = {id(light): mask for _, _, light, mask in self.prepared.emitters}  # the emitters' mask textures
         for data, light in self._reflected_emitters:
             mask = masks.get(id(light))
@@ -407,7 +443,6 @@ class Fermat(Forward):
                 REFLECTED_EMITTER=1,
                 EMITTER_MASK=int(mask is not None),
                 **light_flags,
-                **solver,
             )
             uniforms = {
                 "u_radiance": tuple(light.radiance),
@@ -415,109 +450,180 @@ class Fermat(Forward):
                 **reflector.uniforms(),
             }
             textures = {"u_mask": mask} if mask is not None else {}
-            draws.append((program, self.mesh_vertex_array(program, data), uniforms, textures))
-        return draws
+            draws.append((program, vertex_array(program, data), uniforms, textures, False))
+        return draws, solve_program, solves
+
+    def _solve(self, k: int, eye: tuple[float, float, float]) -> None:
+        """Reflector ``k``'s reflection points of every reflected vertex seen from ``eye`` (transform feedback),
+        unless they are those of this eye already: a frame from the same camera solves nothing."""
+        if self._solved[k] == eye:
+            return
+        program = self._solve_programs[k]
+        if self._grids[k] is not None:
+            self._grids[k].use(GRID_UNIT)
+        set_uniforms(program, {**self._reflectors[k].uniforms(), "r_grid": GRID_UNIT, "u_eye": eye})
+        for vao, points, count in self._solves[k]:
+            vao.transform(points, mode=moderngl.POINTS, vertices=count)
+        self._solved[k] = eye
 
     # ------------------------------------------------------------------ per-size images
     def screen_bytes_per_sample(self) -> int:
-        """The G-buffer's position, normal, uvs and reflection (float32 RGBA, 16 B each) and two depth textures (4 B
-        each): 72 B per target sample (measured 54.5 before the uvs: fermat 134.5 B per sample at 2048², forward
-        80)."""
-        return super().screen_bytes_per_sample() + 72
+        """The G-buffer's position, normal and uvs (float32 RGBA, 16 B each) and depth (4 B), and per reflector its
+        reflection image and depth (20 B) — with a working copy of them (20 B) where a reflected material samples
+        anew each frame: 72 B per target sample for one reflector (measured 54.5 before the uvs: fermat 134.5 B
+        per sample at 2048², forward 80)."""
+        reflectors = len(getattr(self, "_reflectors", ())) or 1
+        return super().screen_bytes_per_sample() + 52 + 20 * reflectors + 20 * int(self.frame_dependent)
 
-    def _images(self, size: tuple[int, int]):
-        """G-buffer (position + id, normal, uvs) and reflection image at a render size, re-created on change."""
+    def _images(self, size: tuple[int, int]) -> _Images:
+        """The G-buffer and reflection images at a render size, re-created on change."""
         if self._gbuffer_size == size:
             return self._gbuffer
         ctx = self.ctx
-        position, normal, uvs, reflection = (ctx.texture(size, 4, dtype="f4") for _ in range(4))
-        for tex in (position, normal, uvs, reflection):
-            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        depth_g, depth_r = depth.float_depth_texture(ctx, size), ctx.depth_texture(size)  # camera: reversed-Z
+
+        def colour():
+            texture = ctx.texture(size, 4, dtype="f4")
+            texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self._objects.append(texture)
+            return texture
+
+        def reflection_image():
+            texture, depth_r = colour(), depth.float_depth_texture(ctx, size)  # copied exactly (copy_image)
+            fbo = ctx.framebuffer(color_attachments=[texture], depth_attachment=depth_r)
+            self._objects += [depth_r, fbo]
+            return fbo, texture
+
+        position, normal, uvs = colour(), colour(), colour()
+        depth_g = depth.float_depth_texture(ctx, size)  # camera: reversed-Z
         gbuffer_fbo = ctx.framebuffer(color_attachments=[position, normal, uvs], depth_attachment=depth_g)
-        reflection_fbo = ctx.framebuffer(color_attachments=[reflection], depth_attachment=depth_r)
-        self._objects += [position, normal, uvs, reflection, depth_g, depth_r, gbuffer_fbo, reflection_fbo]
-        self._gbuffer = (gbuffer_fbo, reflection_fbo, position, normal, uvs, reflection)
+        self._objects += [depth_g, gbuffer_fbo]
+        reflections = [reflection_image() for _ in self._reflectors]
+        working = reflection_image() if self.frame_dependent else None
+        self._gbuffer = _Images(gbuffer_fbo, position, normal, uvs, reflections, working)
         self._gbuffer_size = size
         return self._gbuffer
 
     # ------------------------------------------------------------------ frame
+    @property
+    def frame_dependent(self) -> bool:
+        """A reflected scratched material samples its lobes anew each frame."""
+        return any(scratched for draws in getattr(self, "_reflection_draws", ()) for *_, scratched in draws)
+
+    def _reflects(self) -> bool:
+        """Does this pass draw the reflections (the extras pass of a radiance frame)?"""
+        return self.params.output == "radiance" and bool(self.role.extras)
+
     def _draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
+        self._draw_static(target, view_proj, vp_bytes, frame, seed)
+        self._draw_dynamic(target, view_proj, vp_bytes, frame, seed)
+
+    def _draw_static(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
+        """The mirrors' own shading (and the background), the G-buffer and each reflector's image of the reflected
+        meshes whose shading is the same every frame."""
         super()._draw(target, view_proj, vp_bytes, frame, seed)
-        if self.params.output != "radiance" or not self.role.extras:
+        if not self._reflects():
             return
         ctx = self.ctx
-        gbuffer_fbo, reflection_fbo, position, normal, uvs, reflection = self._images(target.size)
-        eye = tuple(float(c) for c in self.scene.camera.position)
+        images = self._images(target.size)
         ctx.enable(ctx.DEPTH_TEST)
         ctx.disable(ctx.CULL_FACE)
-        gbuffer_fbo.use()
+        images.gbuffer.use()
         ctx.viewport = (0, 0, *target.size)
-        gbuffer_fbo.clear(0.0, 0.0, 0.0, 0.0, depth=depth.CLEAR)
+        images.gbuffer.clear(0.0, 0.0, 0.0, 0.0, depth=depth.CLEAR)
         program = get_program(ctx, GBUFFER_PROGRAM)
         with depth.camera_depth(ctx):
             for vao, reflector_id in self._gbuffer_draws:
                 set_uniforms(program, {"u_view_proj": vp_bytes, "u_reflector_id": reflector_id})
                 vao.render()
-        position.use(GBUFFER_UNITS[0])
-        normal.use(GBUFFER_UNITS[1])
-        for k, draws in enumerate(self._reflection_draws):
-            reflector_id = float(k + 1)
-            program_c, vao_c, material_uniforms, material_textures, size = self._composites[k]
-            reflection_fbo.use()
+        eye = tuple(float(c) for c in self.scene.camera.position)
+        for k in range(len(self._reflectors)):
+            self._solve(k, eye)
+            fbo = images.reflections[k][0]
+            fbo.use()
             ctx.viewport = (0, 0, *target.size)
-            reflection_fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-            if self._grids[k] is not None:
-                self._grids[k].use(GRID_UNIT)
-            common = {
-                "r_grid": GRID_UNIT,
-                "u_view_proj": vp_bytes,
-                "u_eye": eye,
-                "u_depth_range": self._depth_range,
-                "u_gbuffer_position": GBUFFER_UNITS[0],
-                "u_gbuffer_normal": GBUFFER_UNITS[1],
-                "u_reflector_id": reflector_id,
-                "u_hidden_tolerance": self.params.hidden_tolerance * size,
-                **SHADOW_SAMPLERS,  # bound by the forward pass
-                **self._light_uniforms,
-                **ScratchLobes.frame_uniforms(frame, seed),  # reflected scratched meshes sample per frame
-            }
-            for program, vao, uniforms, textures in draws:
+            fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+            self._draw_reflected(k, images, vp_bytes, frame, seed, scratched=False)
+        ctx.disable(ctx.DEPTH_TEST)
+
+    def _draw_dynamic(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
+        """Each reflector's image completed by the reflected meshes that sample anew each frame (on a copy of the
+        static image), composited onto the frame."""
+        if not self._reflects():
+            return
+        ctx = self.ctx
+        images = self._images(target.size)
+        for k in range(len(self._reflectors)):
+            fbo, reflection = images.reflections[k]
+            if images.working is not None and any(scratched for *_, scratched in self._reflection_draws[k]):
+                copy_image(ctx, images.working[0], target.size, reflection, fbo.depth_attachment)
+                fbo, reflection = images.working
+                fbo.use()
+                ctx.enable(ctx.DEPTH_TEST)
+                self._draw_reflected(k, images, vp_bytes, frame, seed, scratched=True)
+            self._composite(k, target, images, reflection)
+        ctx.disable(ctx.DEPTH_TEST)
+
+    def _draw_reflected(self, k: int, images: _Images, vp_bytes, frame: int, seed: int, scratched: bool) -> None:
+        """Reflector ``k``'s reflected draws of one kind (scratched or not) into the bound reflection image."""
+        images.position.use(GBUFFER_UNITS[0])
+        images.normal.use(GBUFFER_UNITS[1])
+        self._bind_lighting()
+        if self._grids[k] is not None:
+            self._grids[k].use(GRID_UNIT)
+        common = {
+            "r_grid": GRID_UNIT,
+            "u_view_proj": vp_bytes,
+            "u_eye": tuple(float(c) for c in self.scene.camera.position),
+            "u_depth_range": self._depth_range,
+            "u_gbuffer_position": GBUFFER_UNITS[0],
+            "u_gbuffer_normal": GBUFFER_UNITS[1],
+            "u_reflector_id": float(k + 1),
+            "u_hidden_tolerance": self.params.hidden_tolerance * self._composites[k][4],
+            **SHADOW_SAMPLERS,
+            **self._light_uniforms,
+            **(ScratchLobes.frame_uniforms(frame, seed) if scratched else {}),  # they sample per frame
+        }
+        for program, vao, uniforms, textures, is_scratched in self._reflection_draws[k]:
+            if is_scratched == scratched:
                 samplers = bind_material_textures(textures)
                 set_uniforms(program, {**uniforms, **samplers, **common})
                 vao.render()
-            # composite onto the image: additive, no depth test
-            target.fbo.use()
-            ctx.viewport = (0, 0, *target.size)
-            ctx.disable(ctx.DEPTH_TEST)
-            ctx.enable(ctx.BLEND)
-            ctx.blend_func = moderngl.ONE, moderngl.ONE
-            reflection.use(GBUFFER_UNITS[2])
-            uvs.use(GBUFFER_UNITS[3])
-            uniforms = {
-                **material_uniforms,
-                **bind_material_textures(material_textures),
-                "u_gbuffer_position": GBUFFER_UNITS[0],
-                "u_gbuffer_normal": GBUFFER_UNITS[1],
-                "u_reflection": GBUFFER_UNITS[2],
-                "u_gbuffer_uvs": GBUFFER_UNITS[3],
-                "u_reflector_id": reflector_id,
-                "u_eye": eye,
-            }
-            color = self.scene.background_color()
-            if color is None:
-                from ..equirect import rotation_y
 
-                self.prepared.background_texture.use(0)
-                uniforms["u_env"] = 0
-                uniforms["u_env_from_world"] = rotation_y(self.scene.environment.rotate_y).astype(np.float32).tobytes()
-            else:
-                uniforms["u_background"] = tuple(color)
-            set_uniforms(program_c, uniforms)
-            vao_c.render(vertices=3)
-            ctx.disable(ctx.BLEND)
-            ctx.enable(ctx.DEPTH_TEST)
+    def _composite(self, k: int, target, images: _Images, reflection) -> None:
+        """Reflector ``k``'s reflection image onto the frame: additive, no depth test."""
+        ctx = self.ctx
+        program_c, vao_c, material_uniforms, material_textures, _ = self._composites[k]
+        target.fbo.use()
+        ctx.viewport = (0, 0, *target.size)
         ctx.disable(ctx.DEPTH_TEST)
+        ctx.enable(ctx.BLEND)
+        ctx.blend_func = moderngl.ONE, moderngl.ONE
+        images.position.use(GBUFFER_UNITS[0])
+        images.normal.use(GBUFFER_UNITS[1])
+        reflection.use(GBUFFER_UNITS[2])
+        images.uvs.use(GBUFFER_UNITS[3])
+        uniforms = {
+            **material_uniforms,
+            **bind_material_textures(material_textures),
+            "u_gbuffer_position": GBUFFER_UNITS[0],
+            "u_gbuffer_normal": GBUFFER_UNITS[1],
+            "u_reflection": GBUFFER_UNITS[2],
+            "u_gbuffer_uvs": GBUFFER_UNITS[3],
+            "u_reflector_id": float(k + 1),
+            "u_eye": tuple(float(c) for c in self.scene.camera.position),
+        }
+        color = self.scene.background_color()
+        if color is None:
+            from ..equirect import rotation_y
+
+            self.prepared.background_texture.use(0)
+            uniforms["u_env"] = 0
+            uniforms["u_env_from_world"] = rotation_y(self.scene.environment.rotate_y).astype(np.float32).tobytes()
+        else:
+            uniforms["u_background"] = tuple(color)
+        set_uniforms(program_c, uniforms)
+        vao_c.render(vertices=3)
+        ctx.disable(ctx.BLEND)
 
     def release(self) -> None:
         if hasattr(self, "_lobes"):

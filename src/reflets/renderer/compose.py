@@ -39,19 +39,17 @@ import numpy as np
 from pydantic import Field
 
 from ..diagnostics import lit_by_constants
-from ..gpu import FrameTimer
+from ..gpu.frames import copy_image
+from ..gpu.targets import TargetCache
 from ..scene.map_emitters import with_map_emitters
 from ..scene.model import PolygonLight, QuadLight, Scene
-from ..techniques.base import Technique, TechniqueParams, add_frame, get_technique, register_technique
+from ..techniques.base import Technique, TechniqueParams, get_technique, register_technique, samples_per_pixel_side
 from ..techniques.forward import (
     CASCADES_HELP,
     EnvironmentOcclusion,
-    Forward,
     GridSide,
     PassRole,
     TextureAnisotropy,
-    check_target_size,
-    samples_per_pixel_side,
     shadow_settings,
 )
 from ..techniques.prepared import PreparedScene
@@ -214,13 +212,30 @@ class Auto(Technique):
                 environment_occlusion=p.environment_occlusion,
                 texture_anisotropy=p.texture_anisotropy,
             )
-            technique.role = PassRole(meshes=meshes, clear=k == 0, extras=k == extras, additive=additive)
+            # the frame's clear is auto's own (a pass that changes every frame may come first)
+            technique.role = PassRole(meshes=meshes, clear=False, extras=k == extras, additive=additive)
             technique.shared = self.prepared
             technique.prepare(pass_scene)
             self.passes.append((method, technique))
         self.final = self.passes[-1][1]  # full scene: its clip planes and camera serve every pass
         self.pass_ms: dict[int, float] = {}
-        self.timer = FrameTimer(self.ctx)
+        self._late = self._late_passes()
+        self._static_frame = TargetCache()  # the static parts of the frame, kept for the frames after the first
+        self._static_view: tuple | None = None
+
+    def _late_passes(self) -> frozenset[int]:
+        """Passes drawn whole after every pass's static part, when some pass changes from frame to frame: a pass
+        that adds to meshes such a pass draws, or that shows what lies behind its see-through meshes."""
+        changing: set[int] = set()  # meshes drawn after the static parts
+        late = set()
+        for k, (_, technique) in enumerate(self.passes):
+            meshes = technique.role.meshes or frozenset()
+            see_through = any(self.scene.materials[self.scene.mesh[i].material].see_through for i in meshes)
+            if changing and ((technique.role.additive and meshes & changing) or see_through):
+                late.add(k)
+            if technique.frame_dependent or k in late:
+                changing |= meshes
+        return frozenset(late)
 
     def _area_method(self, scene: Scene) -> str:
         has_area = any(isinstance(light, QuadLight | PolygonLight) for light in scene.light)
@@ -254,32 +269,52 @@ class Auto(Technique):
         self.scene = self.scene.model_copy(update={"camera": camera})
         return all(technique.set_camera(camera) for _, technique in self.passes)
 
-    def accumulate(self, *, size=None, seed: int = 0, spp: int | None = None, first_frame: int = 0):
-        if self.scene is None:
-            raise RuntimeError("call prepare(scene) before render()")
-        n_frames, s = self.frames(self.default_spp if spp is None else spp)
-        width, height = size or self.scene.camera.size
-        view, proj = self.final.camera_matrices(width, height)
-        view_proj = proj @ view
-        vp_bytes = view_proj.T.astype(np.float32).tobytes()
-        extra = sum(t.screen_bytes_per_sample() for _, t in self.passes)
-        target = self._targets.get(
-            self.ctx, width * s, height * s, lambda: check_target_size(self.ctx, width, height, s, extra)
-        )
-        total = None
-        for frame in range(first_frame, first_frame + n_frames):
-            with self.timer.frame():
-                for k, (_, technique) in enumerate(self.passes):
-                    start = time.perf_counter()
-                    technique._draw(target, view_proj, vp_bytes, frame, seed)
-                    if self.measure_passes:  # a finish per pass: only when asked (it costs a sync)
-                        self.ctx.finish()
-                        self.pass_ms[k] = 1e3 * (time.perf_counter() - start)
-            total = add_frame(total, target.read())
-        self._supersample = s
-        return total, n_frames
+    def camera_matrices(self, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+        return self.final.camera_matrices(width, height)  # one camera matrix for every pass
 
-    resolve = Forward.resolve  # the mean of the frames, box-filtered by the supersampling
+    def screen_bytes_per_sample(self) -> int:
+        return sum(t.screen_bytes_per_sample() for _, t in self.passes)
+
+    def _timed_draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
+        """Each pass into the shared target, timed by its own query (``Renderer.stats['gpu_ms']``). When some pass
+        changes from frame to frame (new samples), the other passes' parts are drawn first and kept: a frame after
+        the first from the same view restores them and draws the changing parts alone."""
+        args = (target, view_proj, vp_bytes, frame, seed)
+        self.pass_ms = {}
+        color = self.scene.background_color()
+        if not any(technique.frame_dependent for _, technique in self.passes):
+            target.use(clear=(*(color or (0.0, 0.0, 0.0)), 1.0))
+            for k, (_, technique) in enumerate(self.passes):
+                self._timed(k, technique._draw, args)
+            return
+        view = (vp_bytes, target.size, seed)
+        kept = self._static_frame.get(self.ctx, *target.size)
+        if frame > 0 and self._static_view == view:
+            with self.timer.timed_pass("static parts kept"):
+                copy_image(self.ctx, target.fbo, target.size, kept.color, kept.depth)
+        else:
+            target.use(clear=(*(color or (0.0, 0.0, 0.0)), 1.0))
+            for k, (_, technique) in enumerate(self.passes):
+                if k not in self._late:
+                    self._timed(k, technique._draw_static, args)
+            copy_image(self.ctx, kept.fbo, target.size, target.color, target.depth)
+            self._static_view = view
+        # the changing parts: first those that read back an image they draw (a reflection: on llvmpipe the read
+        # waits for what was drawn before it, so not for the others' new samples), then the late passes
+        changing = sorted((k for k in range(len(self.passes)) if k not in self._late),
+                          key=lambda k: not self.passes[k][1].reads_own_images)  # fmt: skip
+        for k in changing:
+            self._timed(k, self.passes[k][1]._draw_dynamic, args)
+        for k in sorted(self._late):
+            self._timed(k, self.passes[k][1]._draw, args)
+
+    def _timed(self, k: int, draw, args: tuple) -> None:
+        start = time.perf_counter()
+        with self.timer.timed_pass(f"{k} {self.passes[k][0]}"):
+            draw(*args)
+        if self.measure_passes:  # a finish per pass: only when asked (it costs a sync)
+            self.ctx.finish()
+            self.pass_ms[k] = self.pass_ms.get(k, 0.0) + 1e3 * (time.perf_counter() - start)
 
     #: time each pass of a frame (``pass_costs``): a ``ctx.finish()`` after each, so only when asked
     measure_passes: bool = False
@@ -299,3 +334,6 @@ class Auto(Technique):
             self.prepared.release()
         self.prepared = None
         self._targets.release()
+        if hasattr(self, "_static_frame"):
+            self._static_frame.release()
+            self._static_view = None

@@ -13,6 +13,14 @@ After any sequence of edits the image is the one-shot ``reflets.render()`` of th
 methods (``mc``, ``scratches``) go on accumulating frames across ``render()`` calls while nothing changes, and
 restart after an edit, a new seed or a new spp.
 
+A frame stays on the GPU: ``render_texture()`` draws it and returns the texture (a window draws it as it is),
+``render()`` adds the one read-back, ``read()`` reads the last frame. Nothing in a frame waits for the GPU:
+``stats`` holds ``cpu_ms`` (the frame's passes submitted: Python and driver work), ``image_ms`` (its image formed:
+a progressive frame added to the frame sum), ``read_ms`` (the read-back, when asked), ``frame_ms`` (the call's
+wall clock) and ``gpu_ms`` (each pass's GPU time from timer queries read two frames late: a real GPU's; empty on
+llvmpipe, whose queries mean nothing). On llvmpipe a draw that samples a texture still being drawn waits for it,
+so ``image_ms`` there holds the wait for the frame's fragments (docs/performance.md).
+
 A Renderer draws in the GL context of the thread that made it (``reflets.gpu.context``: one per thread), so it is
 used from that thread; from another, ``render``, ``set_camera`` and ``release`` raise
 :class:`~reflets.errors.ContextThreadError` naming the owning thread. ``reflets.render()`` works from any thread.
@@ -54,8 +62,10 @@ class Renderer:
         self.method = method or self.scene.method or DEFAULT_METHOD
         self._ctx = get_context()
         self._stale = True  # the technique must prepare (again) before the next frame
-        self._accumulated: tuple | None = None  # progressive: (key, float64 sum, frames)
-        self.stats: dict[str, float] = {"prepare_ms": 0.0, "frame_ms": 0.0, "frames": 0, "prepares": 0}
+        self._accumulated: tuple | None = None  # progressive: the (seed, spp) of the frames summed on the GPU
+        self._frames = 0  # frames in the current image
+        self.stats: dict[str, Any] = {"prepare_ms": 0.0, "frame_ms": 0.0, "cpu_ms": 0.0, "image_ms": 0.0,
+                                      "read_ms": 0.0, "gpu_ms": {}, "frames": 0, "prepares": 0}  # fmt: skip
         with turn(self._ctx):
             self._technique = get_technique(self.method)(self._ctx, **params)
             warn_scene(self.scene, self.method)
@@ -63,8 +73,28 @@ class Renderer:
 
     # ------------------------------------------------------------------ frames
     def render(self, seed: int = 0, spp: int | None = None) -> np.ndarray:
-        """The current image: float32 (H, W, 3), linear radiance, row 0 = top. A progressive method adds this
-        call's frames to those of earlier calls with the same seed and spp since the last edit."""
+        """The current image: float32 (H, W, 3), linear radiance, row 0 = top (``render_texture()``, then ``read()``:
+        one read-back). A progressive method adds this call's frames to those of earlier calls with the same seed
+        and spp since the last edit."""
+        self.render_texture(seed, spp)
+        return self.read()
+
+    def read(self) -> np.ndarray:
+        """The last frame's image read back (float32 (H, W, 3), row 0 = top): the one read-back of a frame."""
+        if self._technique is None or self._frames == 0:
+            raise ArgumentError("no frame to read: call render_texture() or render() first", field="read")
+        self._check_thread()
+        t0 = time.perf_counter()
+        with turn(self._ctx):
+            array = self._technique.image(self._frames).read()
+        self.stats["read_ms"] = 1e3 * (time.perf_counter() - t0)
+        self.stats["frame_ms"] += self.stats["read_ms"]
+        return array
+
+    def render_texture(self, seed: int = 0, spp: int | None = None):
+        """The current image on the GPU, nothing read back and nothing waited for: a moderngl texture (W × H
+        float32 RGBA, OpenGL's rows: bottom first) of this renderer's context, valid until the next frame or edit
+        (a window draws it; ``render()`` reads it). Frames accumulate as with ``render()``."""
         from ..arguments import check_spp
 
         check_spp(spp)
@@ -72,26 +102,34 @@ class Renderer:
             raise ArgumentError("this Renderer was released", field="render")
         self._check_thread()
         with turn(self._ctx):
-            return self._render(seed, spp)
+            return self._draw(seed, spp)
 
-    def _render(self, seed: int, spp: int | None) -> np.ndarray:
+    def _draw(self, seed: int, spp: int | None):
         if self._stale:
             self._prepare()
         t0 = time.perf_counter()
         key = (int(seed), spp)
-        first = 0
-        if self._technique.progressive and self._accumulated is not None and self._accumulated[0] == key:
-            _, previous, first = self._accumulated
-        total, frames = self._technique.accumulate(size=self.size, seed=seed, spp=spp, first_frame=first)
-        if first:
-            total, frames = np.add(previous, total, dtype=np.float64), first + frames
-        self._accumulated = (key, total, frames) if self._technique.progressive else None
-        image = self._technique.resolve(total, frames)
-        if image is total and self._accumulated is not None:
-            image = image.copy()  # the caller's to change: not the sum the next call adds to
+        technique = self._technique
+        first = self._frames if technique.progressive and self._accumulated == key else 0
+        self._frames = first + technique.accumulate(size=self.size, seed=seed, spp=spp, first_frame=first)
+        self._accumulated = key if technique.progressive else None
+        texture = technique.image(self._frames).color
+        timer = technique.timer
         self.stats["frame_ms"] = 1e3 * (time.perf_counter() - t0)
-        self.stats["frames"] = frames
-        return image
+        drawn = slice(first - self._frames, None)  # this call's frames
+        self.stats["cpu_ms"] = sum(list(timer.cpu_ms)[drawn])  # their passes submitted
+        self.stats["image_ms"] = sum(list(timer.image_ms)[drawn])  # their image formed (llvmpipe waits there)
+        self.stats["gpu_ms"] = dict(timer.pass_gpu_ms)  # by pass, a few frames late (empty on llvmpipe)
+        self.stats["read_ms"] = 0.0
+        self.stats["frames"] = self._frames
+        return texture
+
+    def finish(self) -> None:
+        """Wait until the GPU has drawn all that was submitted (a benchmark's frame time; a frame loop never needs
+        it: the read-back or the window's swap orders the work)."""
+        self._check_thread()
+        with turn(self._ctx):
+            self._ctx.finish()
 
     @property
     def accumulated_spp(self) -> int:
@@ -178,6 +216,7 @@ class Renderer:
         self._technique.prepare(self.scene)
         self._stale = False
         self._accumulated = None
+        self._frames = 0  # the image went with the technique's resources
         self.stats["prepare_ms"] = 1e3 * (time.perf_counter() - t0)
         self.stats["prepares"] += 1
 

@@ -25,7 +25,6 @@ directional (unit vector towards the light, irradiance); area samples (point, dA
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Annotated, ClassVar, Literal, NamedTuple
 
@@ -34,10 +33,8 @@ import numpy as np
 from pydantic import Field
 
 from ..equirect import rotation_y
-from ..errors import ArgumentError
-from ..gpu import FrameTimer, ProgramSpec, depth, get_program, release_objects, set_uniforms
+from ..gpu import ProgramSpec, depth, get_program, release_objects, set_uniforms
 from ..gpu.targets import TargetCache
-from ..resources import check, fitting_size, largest_fitting
 from ..scene.camera import projection_matrix, view_eye
 from ..scene.emitters import area_light_samples, polygon_normal
 from ..scene.environment import environment_grid
@@ -47,7 +44,12 @@ from ..scene.map_emitters import with_map_emitters
 from ..scene.meshdata import MeshData
 from ..scene.model import DirectionalLight, PointLight, PolygonLight, QuadLight, Scene
 from ..scene.transform import look_at
-from .base import Technique, TechniqueParams, add_frame, register_technique
+from .base import (
+    Technique,
+    TechniqueParams,
+    register_technique,
+    samples_per_pixel_side,
+)
 from .ibl import IBL_FLAGS
 from .prepared import PreparedScene
 from .shading import MaterialShading, shading_for
@@ -127,53 +129,6 @@ class ForwardParams(TechniqueParams):
 def shadow_settings(params) -> ShadowSettings:
     """The soft-shadow settings of a technique's (or ``auto``'s) parameters."""
     return ShadowSettings(params.soft_shadows, params.shadow_samples, params.shadow_cascades)
-
-
-#: bytes per sample of a frame (measured 80.0 on llvmpipe at 2048² and 4096², 1 and 4 spp): the float32 RGBA colour
-#: and 32-bit depth the driver holds (20), the read-back (16, and its RGB copy 12), the float64 sum of the frames
-#: (24) — then resolve's float64 mean (24) and float32 image (12) beside the sum
-FRAME_BYTES_PER_SAMPLE = 80
-
-
-def check_target_size(ctx, width: int, height: int, s: int, extra_per_sample: int = 0) -> None:
-    """The supersampled target must fit the driver's largest framebuffer (else "framebuffer not complete"), and
-    its memory — width · height · s² · (FRAME_BYTES_PER_SAMPLE + ``extra_per_sample``: a technique's own images
-    at the target size) — the available memory (reflets.resources), before the target is made."""
-    limit = int(ctx.info.get("GL_MAX_TEXTURE_SIZE", 16384))
-    if max(width, height) * s > limit:
-        raise ArgumentError(
-            f"{s}×{s} supersampling of {width}x{height} needs a {width * s}x{height * s} target; this GL driver "
-            f"allows at most {limit} per side (use fewer spp or a smaller size)",
-            field="spp",
-        )
-    per_sample = FRAME_BYTES_PER_SAMPLE + extra_per_sample
-    samples = width * height * s * s
-    what = f"{samples:,} samples × {per_sample} B: target, read-back, sums"
-    if s > 1:  # the largest s² that fits at this size
-
-        def fits(budget: int) -> str | None:
-            side = largest_fitting(lambda k: width * height * k * k * per_sample, 1, s, budget)
-            return None if side is None else f"{side * side} spp"
-
-        check("spp", samples * per_sample, value=f"{s * s} spp at {width}x{height}", what=what, fits=fits)
-    else:  # the largest size of the same shape that fits
-        check(
-            "size",
-            samples * per_sample,
-            value=f"{width}x{height}",
-            what=what,
-            fits=lambda budget: fitting_size(width, height, per_sample, budget),
-        )
-
-
-def samples_per_pixel_side(spp: int) -> int:
-    s = math.isqrt(spp)
-    if spp < 1 or s * s != spp:
-        raise ArgumentError(
-            f"{spp} is not a perfect square; forward anti-aliasing uses s×s samples (1, 4, 9, 16…)",
-            field="spp",
-        )
-    return s
 
 
 #: the texture units of a transmissive draw's frame copy (colour, depth): above the shadow maps (10, 11, 16), Fermat's
@@ -332,7 +287,6 @@ class Forward(Technique):
         self._background_vao = ctx.vertex_array(self._background, [])
         self._objects.append(self._background_vao)
         self._near, self._far = camera_range(scene.camera, self.prepared.boxes)
-        self.timer = FrameTimer(ctx)
 
     def _mesh_draw(self, index: int, material) -> MeshDraw:
         """How one mesh is drawn: with the shading of its material's type, or this technique's own BRDF shading."""
@@ -444,10 +398,10 @@ class Forward(Technique):
         (FRAME_BYTES_PER_SAMPLE): its shadings' screen maps (a technique adds its G-buffer)."""
         return sum(getattr(shading, "screen_bytes_per_sample", 0) for shading in getattr(self, "shadings", []))
 
-    def mesh_vertex_array(self, program, mesh: int | MeshData):
+    def mesh_vertex_array(self, program, mesh: int | MeshData, extra: tuple = (), indexed: bool = True):
         """A vertex array of mesh ``mesh`` (a scene index: the prepared scene's buffers; or any ``MeshData``) for a
-        program of mesh.vert's layout, owned by this technique."""
-        vao = self.prepared.vertex_array(program, mesh)
+        program of mesh.vert's layout, owned by this technique (``PreparedScene.vertex_array``)."""
+        vao = self.prepared.vertex_array(program, mesh, extra, indexed)
         self._objects.append(vao)
         return vao
 
@@ -464,44 +418,6 @@ class Forward(Technique):
         proj = projection_matrix(cam, width, height, self._near, self._far)
         return view, proj
 
-    def render(self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int | None = None) -> np.ndarray:
-        total, n_frames = self.accumulate(size=size, seed=seed, spp=spp)
-        return self.resolve(total, n_frames)
-
-    def accumulate(
-        self, *, size: tuple[int, int] | None = None, seed: int = 0, spp: int | None = None, first_frame: int = 0
-    ) -> tuple[np.ndarray, int]:
-        """Draw the frames of ``spp`` samples (frame indices from ``first_frame``: a progressive caller goes on
-        where it stopped) and return their sum at the supersampled size (``add_frame``: one float32 frame as it is,
-        float64 from two on), and how many frames."""
-        if self.scene is None:
-            raise RuntimeError("call prepare(scene) before render()")
-        ctx = self.ctx
-        n_frames, s = self.frames(self.default_spp if spp is None else spp)
-        width, height = size or self.scene.camera.size
-        view, proj = self.camera_matrices(width, height)
-        view_proj = proj @ view
-        vp_bytes = view_proj.T.astype(np.float32).tobytes()  # GLSL matrices are column-major
-        target = self._targets.get(
-            ctx, width * s, height * s, lambda: check_target_size(ctx, width, height, s, self.screen_bytes_per_sample())
-        )
-        total = None
-        for frame in range(first_frame, first_frame + n_frames):
-            with self.timer.frame():
-                self._draw(target, view_proj, vp_bytes, frame, seed)
-            total = add_frame(total, target.read())  # read-back is not part of the frame time
-        self._supersample = s
-        return total, n_frames
-
-    def resolve(self, total: np.ndarray, n_frames: int) -> np.ndarray:
-        """The image of an accumulated sum: the mean of its frames, box-filtered down by the supersampling."""
-        image = Technique.resolve(self, total, n_frames)
-        s = self._supersample
-        if s > 1:
-            height, width = image.shape[0] // s, image.shape[1] // s
-            image = image.reshape(height, s, width, s, 3).mean(axis=(1, 3), dtype=np.float64).astype(np.float32)
-        return image
-
     def set_camera(self, camera) -> bool:
         """Move the camera without preparing again: only the clip planes depend on it, and the directional
         lights' shadow cascades (refitted by whoever made the prepared scene)."""
@@ -516,6 +432,15 @@ class Forward(Technique):
             shading.draw_inputs(target, vp_bytes)
         with depth.camera_depth(self.ctx):
             self._draw_camera(target, vp_bytes, view_proj, frame, seed)
+
+    def _bind_lighting(self) -> None:
+        """This pass's lights, shadow views and prefiltered environment where its programs read them (another
+        pass of the same frame binds its own there)."""
+        for i, buf in enumerate(self._light_buffers):
+            buf.bind_to_storage_buffer(i)
+        self.prepared.shadows.bind()
+        if self._ibl is not None:
+            self._ibl.bind()
 
     def _draw_camera(self, target, vp_bytes, view_proj, frame: int, seed: int) -> None:
         """The meshes, emitters and background from the camera (reversed-Z: ``reflets.gpu.depth``)."""
@@ -534,11 +459,7 @@ class Forward(Technique):
             target.fbo.depth_mask = False
             ctx.enable(ctx.BLEND)
             ctx.blend_func = moderngl.ONE, moderngl.ONE
-        for i, buf in enumerate(self._light_buffers):
-            buf.bind_to_storage_buffer(i)
-        self.prepared.shadows.bind()
-        if self._ibl is not None:
-            self._ibl.bind()
+        self._bind_lighting()
         early = self._depth_prepass(target, vp_bytes)
         eye = view_eye(self.scene.camera)
         per_frame = {"u_view_proj": vp_bytes, "u_eye": eye, **self.frame_uniforms(frame, seed), **SHADOW_SAMPLERS,

@@ -40,7 +40,7 @@ class PreparedScene:
         self.scene = scene
         self._gl = GLObjects(ctx)
         self._own = self._gl.own
-        self._mesh_buffers: dict[int, tuple] = {}  # mesh index → (vbo, ibo), uploaded when a pass first draws it
+        self._mesh_buffers: dict[tuple, tuple] = {}  # mesh → (vbo, ibo, data), uploaded when a pass first draws it
         #: world-space triangles of every mesh (the content-keyed cache's objects: read-only)
         self.meshes: list[MeshData] = [mesh_data(scene, i) for i in range(len(scene.mesh))]
         self._masks = load_masks(scene)  # by light index in this scene; passes ask by light (``mask_of``)
@@ -78,23 +78,25 @@ class PreparedScene:
         """The mask of a light of this scene (a pass's scene may hold a subset of the lights)."""
         return self._masks.get(light_index(self.scene, light))
 
-    def vertex_array(self, program, mesh: int | MeshData):
+    def vertex_array(self, program, mesh: int | MeshData, extra: tuple = (), indexed: bool = True):
         """A vertex array binding mesh ``mesh`` (an index: the shared buffers; or any ``MeshData``, e.g. a
-        subdivided copy: buffers of its own, released with this scene) to a program of mesh.vert's layout.
-        The caller owns the vertex array."""
-        if isinstance(mesh, int):
-            if mesh not in self._mesh_buffers:
-                self._mesh_buffers[mesh] = self._upload(self.meshes[mesh])
-            vbo, ibo = self._mesh_buffers[mesh]
-        else:
-            vbo, ibo = self._upload(mesh)
+        subdivided copy: uploaded once, released with this scene) to a program of mesh.vert's layout, with
+        ``extra`` buffer formats after it (moderngl's (buffer, format, names…)); ``indexed=False`` leaves the index
+        buffer out (one vertex per vertex: transform feedback). The caller owns the vertex array."""
+        vbo, ibo = self.buffers(mesh)
         layout, *names = MESH_LAYOUT
-        return self.ctx.vertex_array(program, [(vbo, layout, *names)], ibo, skip_errors=True)
+        content = [(vbo, layout, *names), *extra]
+        return self.ctx.vertex_array(program, content, ibo if indexed else None, skip_errors=True)
 
-    def _upload(self, data: MeshData) -> tuple:
-        vbo = self._own(self.ctx.buffer(data.interleaved().tobytes()))
-        ibo = self._own(self.ctx.buffer(data.indices.tobytes()))
-        return vbo, ibo
+    def buffers(self, mesh: int | MeshData) -> tuple:
+        """(vertex buffer, index buffer) of a scene mesh or of a ``MeshData``, uploaded on first use."""
+        key = ("mesh", mesh) if isinstance(mesh, int) else ("data", id(mesh))
+        if key not in self._mesh_buffers:
+            data = self.meshes[mesh] if isinstance(mesh, int) else mesh
+            vbo = self._own(self.ctx.buffer(data.interleaved().tobytes()))
+            ibo = self._own(self.ctx.buffer(data.indices.tobytes()))
+            self._mesh_buffers[key] = (vbo, ibo, data)  # the data kept: its id is not reused while it is a key
+        return self._mesh_buffers[key][:2]
 
     def _emitter(self, index: int, light) -> tuple:
         """(program, vertex array, light, mask texture or None) drawing an area light's emitting face."""

@@ -87,7 +87,8 @@ class ViewerController(Painting):
         self.last_hit: np.ndarray | None = None
         #: blend the selected mesh's potential highlight curves (a line integral convolution of ℓ) into the view
         self.show_highlights = False
-        self.image: np.ndarray | None = None
+        self.texture = None  # the last frame, on the GPU
+        self._image: np.ndarray | None = None  # … and read back, once asked for
         self.frame_ms: list[float] = []
         self.reference: ReferenceJob | None = None
         self._pointer: dict | None = None
@@ -109,6 +110,8 @@ class ViewerController(Painting):
         status = {
             "method": self.method,
             "frame_ms": statistics.median(self.frame_ms) if self.frame_ms else float("nan"),
+            "cpu_ms": float(self.renderer.stats["cpu_ms"]),  # the last frame's submission
+            "gpu_ms": sum(self.renderer.stats["gpu_ms"].values()) or None,  # its passes (a real GPU's queries)
             "frames": int(self.renderer.stats["frames"]),
             "spp": self.renderer.accumulated_spp,
             "renderer": gl_info()["renderer"],
@@ -137,16 +140,39 @@ class ViewerController(Painting):
         return f"light[{index}] ({self.scene.light[index].type})"
 
     # ------------------------------------------------------------------ frames
-    def render(self) -> np.ndarray:
-        """The next frame (float32 HDR, row 0 at the top); a progressive method accumulates while nothing
-        changes."""
+    def draw(self):
+        """The next frame, on the GPU (returned: a texture of the renderer's context, OpenGL's rows); nothing is
+        read back until ``image`` is asked for. A progressive method accumulates while nothing changes."""
         if self._pending_stroke is not None:
             stroke, self._pending_stroke = self._pending_stroke, None
             self._on_stroke(**stroke)
         t = time.perf_counter()
-        self.image = self.renderer.render()
+        self.texture = self.renderer.render_texture()
+        self._image = None
         self.frame_ms = [*self.frame_ms[-(HISTORY - 1) :], 1e3 * (time.perf_counter() - t)]
+        return self.texture
+
+    def render(self) -> np.ndarray:
+        """The next frame as an array (float32 HDR, row 0 at the top): ``draw()``, then one read-back."""
+        self.draw()
         return self.image
+
+    @property
+    def image(self) -> np.ndarray | None:
+        """The last frame (float32 HDR, row 0 at the top), read back on first use; None before any frame."""
+        if self._image is None and self.texture is not None:
+            self._image = self.renderer.read()
+        return self._image
+
+    def shown_texture(self):
+        """The frame's texture when the view shows it as drawn (no reference, error map or highlight curves over
+        it: those are made on the CPU), else None."""
+        if self.texture is None:
+            self.draw()
+        if self.show_highlights or (self.show != "image" and self.reference is not None
+                                    and self.reference.image is not None):  # fmt: skip
+            return None
+        return self.texture
 
     def shown(self) -> np.ndarray:
         """The HDR image the view shows: the frame, the reference, or the error map (|frame − reference| /

@@ -9,7 +9,7 @@ import numpy as np
 from ..gpu import GLObjects, ProgramSpec, get_program, set_uniforms
 
 DISPLAY_PROGRAM = ProgramSpec(
-    "display", vertex="reflets/viewer/shaders/display.vert", fragment="reflets/viewer/shaders/display.frag"
+    "display", vertex="reflets/gpu/shaders/fullscreen.vert", fragment="reflets/viewer/shaders/display.frag"
 )
 
 
@@ -24,6 +24,7 @@ class Display:
         self.texture = None
 
     def draw(self, image: np.ndarray, exposure: float = 0.0, tonemap: str = "srgb") -> None:
+        """An HDR array (row 0 at the top), uploaded then drawn (the reference, error and highlight views)."""
         h, w = image.shape[:2]
         if self.texture is None or self.texture.size != (w, h):
             if self.texture is not None:
@@ -31,9 +32,18 @@ class Display:
             self.texture = self.ctx.texture((w, h), 3, dtype="f4")
             self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.texture.write(np.ascontiguousarray(image, np.float32).tobytes())
-        self.texture.use(0)
+        self._draw(self.texture, exposure, tonemap, top_first=True)
+
+    def draw_texture(self, texture, exposure: float = 0.0, tonemap: str = "srgb") -> None:
+        """A frame still on the GPU (``Renderer.render_texture``: OpenGL's rows), drawn without a read-back."""
+        texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self._draw(texture, exposure, tonemap, top_first=False)
+
+    def _draw(self, texture, exposure: float, tonemap: str, top_first: bool) -> None:
+        texture.use(0)
         self.ctx.enable_only(moderngl.NOTHING)  # no blending or depth test left by a pass
-        set_uniforms(self.program, {"u_image": 0, "u_exposure": float(exposure), "u_aces": int(tonemap == "aces")})
+        set_uniforms(self.program, {"u_image": 0, "u_exposure": float(exposure), "u_aces": int(tonemap == "aces"),
+                                    "u_top_first": int(top_first)})  # fmt: skip
         self.vao.render(moderngl.TRIANGLES, vertices=3)
 
     def release(self) -> None:

@@ -40,7 +40,8 @@ class Viewer(RemoteFrameBuffer):
 
     # ------------------------------------------------------------------ jupyter_rfb
     def get_frame(self) -> np.ndarray:
-        self.controller.render()
+        """The frame jupyter_rfb sends (called only for a frame it sends: the one read-back is of that frame)."""
+        self.controller.draw()
         return self.controller.snapshot()
 
     def handle_event(self, event: dict) -> None:

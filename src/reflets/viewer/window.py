@@ -133,10 +133,14 @@ class ViewerWindow:
 
     def draw(self) -> None:
         controller = self.controller
-        controller.render()
+        controller.draw()
         self.wnd.use()
         self.ctx.viewport = (0, 0, *self.wnd.buffer_size)
-        self.display.draw(controller.shown(), controller.exposure, controller.tonemap_mode)
+        texture = controller.shown_texture()
+        if texture is not None:  # the frame as drawn: straight from the GPU, nothing read back
+            self.display.draw_texture(texture, controller.exposure, controller.tonemap_mode)
+        else:
+            self.display.draw(controller.shown(), controller.exposure, controller.tonemap_mode)
         self.frames += 1
         if self.frames % 10 == 1:
             self.wnd.title = self.title()
@@ -164,7 +168,9 @@ class ViewerWindow:
 
     def title(self) -> str:
         s = self.controller.status()
-        text = f"reflets — {s['method']} — {s['frame_ms']:.0f} ms — {s['frames']} frame(s) — {s['renderer']}"
+        gpu = f", GPU {s['gpu_ms']:.1f} ms" if s["gpu_ms"] is not None else ""
+        text = (f"reflets — {s['method']} — CPU {s['cpu_ms']:.1f} ms{gpu} — {s['frames']} frame(s) — "
+                f"{s['renderer']}")  # fmt: skip
         text += f" — {s['selection']}"
         if "reference_progress" in s:
             text += f" — reference {100 * s['reference_progress']:.0f} %"

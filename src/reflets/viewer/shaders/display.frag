@@ -1,9 +1,10 @@
-// Provides the viewer's display: the HDR frame (row 0 at the top, as reflets' images) × 2^exposure, the tone
-// curve of reflets.imageio.tonemap (clamp, or Narkowicz's ACES fit first), the exact sRGB OETF; the 8-bit
-// window rounds it as the PNG writer does.
+// Provides the viewer's display: the HDR frame (an uploaded array's row 0 at the top, u_top_first; a rendered
+// texture's at the bottom) × 2^exposure, the tone curve of reflets.imageio.tonemap (clamp, or Narkowicz's ACES fit
+// first), the exact sRGB OETF; the 8-bit window rounds it as the PNG writer does.
 uniform sampler2D u_image;
 uniform float u_exposure;
 uniform int u_aces;
+uniform int u_top_first;
 
 in vec2 v_uv;
 out vec4 f_color;
@@ -13,7 +14,7 @@ vec3 srgb(vec3 x) {
 }
 
 void main() {
-    vec3 x = clamp(texture(u_image, vec2(v_uv.x, 1.0 - v_uv.y)).rgb * exp2(u_exposure), 0.0, 1e6);
+    vec3 x = clamp(texture(u_image, vec2(v_uv.x, u_top_first == 1 ? 1.0 - v_uv.y : v_uv.y)).rgb * exp2(u_exposure), 0.0, 1e6);
     if (u_aces == 1) x = (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14);
     f_color = vec4(srgb(clamp(x, 0.0, 1.0)), 1.0);
 }

@@ -1,4 +1,4 @@
-// Provides the display pass's full-screen triangle (no vertex buffer) and its texture coordinates.
+// Provides a full-screen triangle (no vertex buffer) and its texture coordinates: the display and the frame sum.
 out vec2 v_uv;
 
 void main() {

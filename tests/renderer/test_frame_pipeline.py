@@ -1,0 +1,135 @@
+"""A persistent renderer's frame stays on the GPU: no ``finish()`` and no read-back unless an array is asked for
+(``render()``: one), the supersampled / progressive image made on the GPU equals its definition, and the passes
+that do not depend on the camera are drawn again only when what they depend on changes."""
+
+from __future__ import annotations
+
+import collections
+
+import moderngl
+import numpy as np
+import pytest
+
+import reflets
+from reflets.demo import scene_path
+from reflets.scene import load_scene
+
+from .scenes import sphere_scene
+
+SIZE = (64, 48)
+
+
+@pytest.fixture
+def gl_syncs(monkeypatch):
+    """Counts of the calls that make the CPU wait for the GPU: finish() and every read-back."""
+    counts: collections.Counter = collections.Counter()
+
+    def counting(cls, name):
+        original = getattr(cls, name)
+
+        def wrapper(self, *args, **kwargs):
+            counts[f"{cls.__name__}.{name}"] += 1
+            return original(self, *args, **kwargs)
+
+        monkeypatch.setattr(cls, name, wrapper)
+
+    for cls, name in ((moderngl.Context, "finish"), (moderngl.Framebuffer, "read"), (moderngl.Texture, "read"),
+                      (moderngl.Buffer, "read"), (moderngl.Buffer, "read_into"), (moderngl.Texture, "read_into"),
+                      (moderngl.Framebuffer, "read_into")):  # fmt: skip
+        counting(cls, name)
+    return counts
+
+
+def test_a_showcase_frame_waits_for_nothing_and_render_reads_back_once(ctx, gl_syncs):
+    scene = load_scene(scene_path("60_showcase.toml"))
+    with reflets.Renderer(scene, size=SIZE) as renderer:
+        renderer.render()  # compiles the programs and draws the camera-independent passes
+        gl_syncs.clear()
+        for _ in range(3):
+            texture = renderer.render_texture()
+        assert sum(gl_syncs.values()) == 0, gl_syncs
+        assert texture.size == SIZE
+        image = renderer.render()
+        assert gl_syncs == {"Framebuffer.read": 1}
+        assert image.shape == (SIZE[1], SIZE[0], 3) and renderer.stats["frames"] == 5
+        renderer.set_camera(position=(0.6, 1.4, 4.0))  # a camera move: still no wait
+        gl_syncs.clear()
+        renderer.render_texture()
+        assert sum(gl_syncs.values()) == 0, gl_syncs
+        assert renderer.stats["cpu_ms"] > 0.0 and isinstance(renderer.stats["gpu_ms"], dict)
+
+
+def test_a_window_presents_the_frame_without_reading_it_back(ctx, gl_syncs):
+    from reflets.viewer.controller import ViewerController
+    from reflets.viewer.display import Display
+
+    controller = ViewerController(sphere_scene("microfacet", "point", size=SIZE))
+    display = Display(ctx)
+    window = ctx.simple_framebuffer(SIZE)  # stands for the window's framebuffer
+    try:
+        controller.draw()
+        gl_syncs.clear()
+        for _ in range(3):
+            controller.draw()
+            window.use()
+            display.draw_texture(controller.shown_texture())
+        assert sum(gl_syncs.values()) == 0, gl_syncs
+        shown = np.frombuffer(window.read(components=3), np.uint8).reshape(SIZE[1], SIZE[0], 3)[::-1]
+        np.testing.assert_array_equal(shown, controller.snapshot())  # the same pixels as the CPU tone curve
+    finally:
+        display.release()
+        window.release()
+        controller.release()
+
+
+def test_the_gpu_box_filter_is_the_mean_of_the_supersampled_frame(ctx):
+    scene = sphere_scene("microfacet", "point", size=SIZE)
+    four = reflets.render(scene, spp=4)
+    big = reflets.render(scene, size=(2 * SIZE[0], 2 * SIZE[1]))  # the same samples, one per pixel
+    expected = big.reshape(SIZE[1], 2, SIZE[0], 2, 3).mean(axis=(1, 3), dtype=np.float64)
+    np.testing.assert_allclose(four, expected, rtol=1e-6, atol=1e-7)
+    assert four.std() > 0.01  # a real image
+
+
+def test_camera_independent_passes_are_drawn_once(ctx, monkeypatch):
+    """Shadow maps (but a directional light's cascades, fitted to the camera), the translucent light views and the
+    prefiltered environment: drawn when prepared, not per frame; a camera move redraws only the cascades."""
+    from reflets.techniques.ibl import PrefilteredEnvironment
+    from reflets.techniques.shadows import ShadowMaps
+    from reflets.translucency.shading import TranslucentShading
+
+    drawn: collections.Counter = collections.Counter()
+    original_draw = ShadowMaps._draw
+    monkeypatch.setattr(ShadowMaps, "_draw", lambda self, views: (drawn.update({"shadow views": len(views)}),
+                                                                   original_draw(self, views))[1])  # fmt: skip
+    original_inputs = TranslucentShading.draw_inputs
+
+    def inputs(self, target, vp_bytes):
+        drawn["light views"] += int(not self._light_view_drawn)
+        return original_inputs(self, target, vp_bytes)
+
+    monkeypatch.setattr(TranslucentShading, "draw_inputs", inputs)
+    original_init = PrefilteredEnvironment.__init__
+
+    def prefilter(self, *args):
+        drawn["prefiltered environments"] += 1
+        original_init(self, *args)
+
+    monkeypatch.setattr(PrefilteredEnvironment, "__init__", prefilter)
+    scene = load_scene(scene_path("60_showcase.toml"))
+    with reflets.Renderer(scene, size=SIZE) as renderer:
+        renderer.render()
+        prepared = dict(drawn)
+        assert prepared["shadow views"] > 0 and prepared["light views"] > 0 and prepared["prefiltered environments"]
+        for _ in range(3):
+            renderer.render_texture()
+        assert drawn == prepared  # nothing drawn again by frames from the same camera
+        renderer.set_camera(position=(0.6, 1.4, 4.0))
+        renderer.render_texture()
+        shadows = renderer._technique.prepared.shadows
+        cascades = sum(count for index, (_, count) in shadows._cascades.items()
+                       if index in shadows._cascaded and count > 1)  # fmt: skip
+        assert renderer.stats["prepares"] == 1
+        assert drawn["light views"] == prepared["light views"]
+        assert drawn["prefiltered environments"] == prepared["prefiltered environments"]
+        assert drawn["shadow views"] - prepared["shadow views"] == cascades  # the cascades alone
