@@ -34,6 +34,8 @@ from ..diagnostics import RefletsWarning
 from ..gpu.context import is_software
 
 SIZES = ((1280, 720), (1920, 1080))
+#: the showcase where a frame's submission shows (the issue's bound on llvmpipe: cpu_ms ≤ 5 ms)
+SMALL = (64, 48)
 #: frames per mode: a GPU's figures need many; llvmpipe's 1080p showcase frame takes seconds
 FRAMES = {"gpu": 60, "software": 3, "quick": 2}
 
@@ -112,7 +114,43 @@ def _renderer_rows(frames: int, sizes, progress) -> list[dict]:
                 for mode in ("orbit", "still", "orbit + read-back"):
                     rows.append({"scene": label, "size": list(size), "prepare_ms": prepare_ms,
                                  **_loop(renderer, frames, mode, positions)})  # fmt: skip
+                if label == "showcase":
+                    rows[-1]["pass_costs"] = _pass_costs(renderer, positions[0])
     return rows
+
+
+def _pass_costs(renderer, position) -> dict[str, list]:
+    """Where a showcase frame's time goes, pass by pass: a ``finish()`` after each (the only clock llvmpipe has),
+    in the first frame of a view (every pass whole) and in the next one (the changing parts alone)."""
+    technique = renderer._technique
+    technique.measure_passes = True
+    costs = {}
+    try:
+        renderer.set_camera(position=position)
+        for frame in ("new view", "same view"):
+            renderer.render_texture()
+            renderer.finish()
+            costs[frame] = [[f"{k} {method}", meshes, ms]
+                            for k, (method, meshes, ms) in enumerate(technique.pass_costs())]  # fmt: skip
+    finally:
+        technique.measure_passes = False
+    return costs
+
+
+def _small_showcase(frames: int) -> dict:
+    """The showcase at 64 × 48, where the pixels cost little and a frame's submission shows: ``cpu_ms`` of
+    frames from one view (the changing passes alone) and after a camera move, and ``image_ms`` (median)."""
+    import reflets
+
+    from .renderer import showcase_scene
+
+    scene = showcase_scene(SMALL)
+    positions = _orbit(scene.camera, frames)
+    with reflets.Renderer(scene, size=SMALL) as renderer:
+        renderer.render_texture()
+        still = _loop(renderer, frames, "still", positions)
+        orbit = _loop(renderer, frames, "orbit", positions)
+    return {"size": list(SMALL), "still": still, "orbit": orbit}
 
 
 def _ar_rows(frames: int, sizes, progress) -> tuple[list[dict], str | None]:
@@ -150,7 +188,7 @@ def _ar_rows(frames: int, sizes, progress) -> tuple[list[dict], str | None]:
 
 
 def _fmt(value, digits: int = 1) -> str:
-    return "–" if value is None else f"{value:.{digits}f}"
+    return "–" if value is None or value != value else f"{value:.{digits}f}"  # None or NaN: not measured
 
 
 def bench_gpu(quick: bool, out_dir) -> tuple[dict, str]:
@@ -165,6 +203,8 @@ def bench_gpu(quick: bool, out_dir) -> tuple[dict, str]:
         print(f"[{time.perf_counter() - started:5.0f} s] {what}", flush=True)
 
     rows = _renderer_rows(frames, sizes, progress)
+    progress(f"showcase {SMALL[0]}×{SMALL[1]}")
+    small = _small_showcase(max(frames, 15))
     ar_rows, ar_missing = _ar_rows(frames, sizes, progress)
     device = gl_info()
     md = [
@@ -185,8 +225,19 @@ def bench_gpu(quick: bool, out_dir) -> tuple[dict, str]:
         md.append(f"| {r['scene']} | {r['size'][0]}×{r['size'][1]} | {r['mode']} | {_fmt(r['frame_ms_median'])} | "
                   f"{_fmt(r['frame_ms_p95'])} | {_fmt(r.get('cpu_ms_median'), 2)} | "
                   f"{_fmt(r.get('image_ms_median'), 2)} | {_fmt(r.get('gpu_ms_median'), 2)} |")  # fmt: skip
+    md += ["", f"Showcase at {SMALL[0]}×{SMALL[1]} (median of {small['still']['frames']} frames): `cpu_ms` "
+           f"{small['still']['cpu_ms_median']:.2f} from an unchanged view, {small['orbit']['cpu_ms_median']:.1f} "
+           f"after a camera move; `image_ms` {small['still']['image_ms_median']:.2f}."]  # fmt: skip
     if ar_missing:
         md += ["", f"AR loop not run: {ar_missing}."]
+    for r in rows:
+        if "pass_costs" in r:
+            costs = r["pass_costs"]
+            md += ["", f"Showcase {r['size'][0]}×{r['size'][1]}, each pass's ms (a `finish()` after each; the frame "
+                   "sum and the image not included):", "", "| pass | meshes | first frame of a view | next frame |",
+                   "|---|---|---|---|"]  # fmt: skip
+            for (name, meshes, first), (_, _, next_) in zip(costs["new view"], costs["same view"], strict=True):
+                md.append(f"| {name} | {meshes} | {_fmt(first)} | {_fmt(next_)} |")
     with_passes = [r for r in rows if r["gpu_ms_passes"]]
     if with_passes:
         md += ["", "GPU time per pass (median ms, timer queries):", ""]
@@ -194,6 +245,6 @@ def bench_gpu(quick: bool, out_dir) -> tuple[dict, str]:
             parts = ", ".join(f"{name} {ms:.2f}" for name, ms in r["gpu_ms_passes"].items())
             md.append(f"- {r['scene']} {r['size'][0]}×{r['size'][1]} {r['mode']}: {parts}")
     md.append("")
-    results = {"device": device, "software": software, "frames": frames, "rows": rows, "ar": ar_rows,
+    results = {"device": device, "software": software, "frames": frames, "rows": rows, "small": small, "ar": ar_rows,
                "ar_missing": ar_missing, "wall_s": time.perf_counter() - started}  # fmt: skip
     return results, "\n".join(md)

@@ -12,8 +12,9 @@
 - scaling: a GGX sphere on a floor with 1, 4, 16 point lights, 1, 4 quad lights, and 1, 10, 100 sphere
   instances, median frame of a persistent renderer.
 
-Frame times are wall clock around ``ctx.finish()`` (llvmpipe's timer queries mean nothing), medians, all rows of
-one table measured in the same run.
+Frame times are the wall clock of ``render()`` (the frame and its read-back: the read waits for the GPU), medians,
+all rows of one table measured in the same run; the pass costs a ``ctx.finish()`` after each pass (llvmpipe's
+timer queries mean nothing). `reflets bench gpu` times frames without read-back and with timer queries.
 """
 
 from __future__ import annotations
@@ -71,6 +72,7 @@ def _showcase(size, frames: int, one_shot_every: int) -> tuple[dict, list[str]]:
             errors.append(compare(image, fresh)["relmse"])
     technique = renderer._technique
     technique.measure_passes = True
+    renderer.set_camera(**_orbit(scene, frames)[-1])  # a new view's first frame: every pass drawn whole
     renderer.render()
     passes = [{"pass": m, "meshes": n, "ms": ms} for m, n, ms in technique.pass_costs()]
     renderer.release()

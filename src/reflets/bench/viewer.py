@@ -2,8 +2,8 @@
 
 For the showcase at 640 × 480 and 1280 × 720, ``reflets view`` runs in a real window (under ``xvfb-run`` when
 there is no display) with a scripted orbit (one event per frame): median and 95th percentile of the window's
-frame time (render, upload, tone mapping, panels, swap), event-to-frame latency (from the event to its frame
-swapped), time from starting the command to its first frame. In this process, the same orbit through a
+frame time (render, tone mapping of the frame's texture, panels, swap), event-to-frame latency (from the event
+to its frame swapped), time from starting the command to its first frame. In this process, the same orbit through a
 persistent ``Renderer`` gives the frame time the viewer is compared with (the acceptance: the viewer's median
 ≤ 1.5× it), and a still view accumulates until its image is within the reference's noise of its converged
 value (relative MSE against 64 accumulated frames below the noise of the 64-spp NumPy reference the viewer

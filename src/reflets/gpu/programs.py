@@ -248,11 +248,11 @@ def set_uniforms(program, values: dict) -> None:
     ``bytes`` values are written raw (matrices: column-major float32); for an array, only the elements the
     driver kept active (a prefix: trailing elements a shader never indexes may be trimmed)."""
     for key, value in values.items():
-        if key in program:
+        uniform = program.get(key, None)  # a dict lookup (``key in program`` walks every member)
+        if uniform is not None:
             if isinstance(value, bytes):
-                uniform = program[key]
                 if uniform.array_length > 1:  # float32 / int32 components
                     value = value[: 4 * uniform.dimension * uniform.array_length]
                 uniform.write(value)
             else:
-                program[key].value = value
+                uniform.value = value

@@ -10,17 +10,18 @@ from .depth import CLEAR, float_depth_texture
 
 
 class HDRTarget:
-    """An offscreen float32 framebuffer of a given size, owned by one context."""
+    """An offscreen float32 framebuffer of a given size, owned by one context (``depth=False``: colour alone)."""
 
-    def __init__(self, ctx, width: int, height: int):
+    def __init__(self, ctx, width: int, height: int, depth: bool = True):
         self.ctx = ctx
         self.size = (int(width), int(height))
         self.color = ctx.texture(self.size, 4, dtype="f4")
-        self.depth = float_depth_texture(ctx, self.size)  # reversed-Z: camera passes draw in it (gpu.depth)
+        # reversed-Z: camera passes draw in it (gpu.depth)
+        self.depth = float_depth_texture(ctx, self.size) if depth else None
         try:
             self.fbo = ctx.framebuffer(color_attachments=[self.color], depth_attachment=self.depth)
         except moderngl.Error as exc:  # the driver could not allocate it (llvmpipe: at most 1 GB per texture)
-            release_objects(ctx, [self.color, self.depth])
+            release_objects(ctx, [t for t in (self.color, self.depth) if t is not None])
             raise ArgumentError(
                 f"this GL driver cannot make a {width}x{height} float32 target ({exc}); lower the size or the spp",
                 field="size",
@@ -29,7 +30,7 @@ class HDRTarget:
     def use(self, clear: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)) -> None:
         self.fbo.use()
         self.ctx.viewport = (0, 0, *self.size)
-        self.fbo.clear(*clear, depth=CLEAR)
+        self.fbo.clear(*clear, depth=CLEAR)  # (ignored without a depth attachment)
 
     def bind(self) -> None:
         """Draw into this target without clearing it (a composed frame's later passes)."""
@@ -44,7 +45,7 @@ class HDRTarget:
         return np.ascontiguousarray(data.reshape(h, w, components)[::-1])
 
     def release(self) -> None:
-        release_objects(self.ctx, [self.fbo, self.color, self.depth])
+        release_objects(self.ctx, [t for t in (self.fbo, self.color, self.depth) if t is not None])
 
 
 class GLObjects:

@@ -7,8 +7,9 @@ A frame is timed two ways, neither of which waits for the GPU:
   its own threads, after — but a draw that samples a texture still being drawn waits for it there);
 - ``image_ms``: forming the frame's image after its passes (adding it to the frame sum: on llvmpipe that read of
   the frame waits for its fragments, which a GPU does not);
-- ``gpu_ms`` per pass: a GL_TIME_ELAPSED query around each pass, read :data:`LAG` frames later, when the GPU has
-  long finished it (moderngl has no "result available?" call: the lag is what keeps the read from waiting).
+- ``pass_gpu_ms`` (each pass) and ``gpu_ms`` (their sum, per frame): a GL_TIME_ELAPSED query around each pass,
+  read :data:`LAG` frames later, when the GPU has long finished it (moderngl has no "result available?" call: the
+  lag is what keeps the read from waiting).
 
 On Mesa's llvmpipe a time query returns nonsense (measured: 2³² − 1 ns), so there are no ``gpu_ms`` there.
 Benchmarks that want a whole frame's time on llvmpipe use :meth:`FrameTimer.measuring`: a ``finish()`` before
@@ -86,9 +87,11 @@ class FrameTimer:
             yield
             return
         query = self._free.pop() if self._free else self.ctx.query(time=True)
-        with query:
-            yield
-        self._current.append((name, query))
+        try:
+            with query:
+                yield
+        finally:
+            self._current.append((name, query))  # read (then reused) with its frame, even after an error
 
     def _read(self, keep: int) -> None:
         """Read the queries of all but the last ``keep`` frames (their passes summed by name)."""

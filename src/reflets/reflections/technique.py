@@ -10,8 +10,9 @@ Passes per frame (the document's §3.2, with its silhouette problem fixed):
 
 1. the scene as ``forward`` renders it (reflectors show their non-specular part);
 2. a G-buffer of the nearest surface per pixel: world position, reflector id, normal;
-3. per reflector, the scene without reflectors through ``reflected.vert``: each vertex's reflection point by
-   the solver (``solver = "robust"``: Newton steps with the analytic Hessian in a local chart, residual check
+3. per reflector, the scene without reflectors drawn at each vertex's reflection point, found by the solver
+   (``solve.vert``, by transform feedback once per eye position; ``reflected.vert`` draws from it;
+   ``solver = "robust"``: Newton steps with the analytic Hessian in a local chart, residual check
    and rejection of back-facing / non-existent reflections; ``"document"``: the document's triangle-secant
    iteration), depth |PV| (level-1 visibility: the object nearest to the mirror wins); fragments are kept only
    on this reflector's visible pixels (an exact id test: linearly interpolated triangles spill past the
@@ -212,23 +213,25 @@ def subdivision_bytes(meshes: list[tuple[int, int, int]], reflectors: int) -> in
       included (float64 interpolated attributes 88 V, handedness 4 V, int64 indices 24 F, the float64 tangent +
       handedness 32 V before the float32 copies; int64 corners and one attribute's float64 corner values per
       triangle; the barycentric grid) — tracemalloc measures 206–209 B per vertex where this gives 208–231;
-    - G = 48 V + 12 F per reflector: the vertex and index buffers the GL driver keeps (llvmpipe copies them);
+    - G = 48 V + 12 F: the vertex and index buffers the GL driver keeps (llvmpipe copies them), uploaded once
+      for every reflector, and 16 V per reflector: its solved reflection points (``_solve``);
     - an upload's transients beyond its buffers: max(48 V − 12 F, 12 F) (the interleaved array and its bytes);
     - drawing them: RASTER_BYTES (llvmpipe bins a bounded scene: measured ≤ 51 MB more at any k).
 
     The peak is the larger of the subdivision phase, max over j of Σ_{i<j} R_i + S_j (meshes split in order), and
-    Σ R + reflectors · Σ G + max(the largest upload's transients, RASTER_BYTES). Calibrated on the teapot scene:
-    estimate / measured growth of the peak resident memory over k = 1 is 1.31 / 1.16 / 1.04 / 1.02 / 1.01 at
-    k = 10 / 20 / 40 / 60 / 80 (90 / 159 / 443 / 978 / 1,721 MB estimated)."""
-    kept = phase_a = upload = buffers = 0
+    Σ R + Σ G + reflectors · 16 Σ V + max(the largest upload's transients, RASTER_BYTES). Calibrated on the teapot
+    scene (``python tools/calibrate_memory.py``): estimate / measured growth of the peak resident memory over k = 1
+    is 5.73 / 1.75 / 1.14 at k = 10 / 20 / 40 (93 / 170 / 465 MB estimated; docs/inputs-and-outputs.md)."""
+    kept = phase_a = upload = buffers = points = 0
     for t, n, k in meshes:
         v, f = split_size(t, n, k)
         if k > 1:
             phase_a = max(phase_a, kept + max(164 * v + 24 * f, 140 * v + 36 * f) + 96 * t + 64 * (k + 1) ** 2)
             kept += 48 * v + 12 * f
         buffers += 48 * v + 12 * f
+        points += 16 * v
         upload = max(upload, 48 * v - 12 * f, 12 * f)
-    return max(phase_a, kept + reflectors * buffers + max(upload, RASTER_BYTES))
+    return max(phase_a, kept + buffers + reflectors * points + max(upload, RASTER_BYTES))
 
 
 class FermatParams(ForwardParams):
@@ -559,6 +562,7 @@ class Fermat(Forward):
                 fbo, reflection = images.working
                 fbo.use()
                 ctx.enable(ctx.DEPTH_TEST)
+                ctx.disable(ctx.CULL_FACE)
                 self._draw_reflected(k, images, vp_bytes, frame, seed, scratched=True)
             self._composite(k, target, images, reflection)
         ctx.disable(ctx.DEPTH_TEST)

@@ -273,7 +273,10 @@ class Auto(Technique):
         return self.final.camera_matrices(width, height)  # one camera matrix for every pass
 
     def screen_bytes_per_sample(self) -> int:
-        return sum(t.screen_bytes_per_sample() for _, t in self.passes)
+        """The passes' screen images, and the kept static frame (colour + depth, 20 B) when some pass changes from
+        frame to frame."""
+        kept = 20 if any(t.frame_dependent for _, t in self.passes) else 0
+        return sum(t.screen_bytes_per_sample() for _, t in self.passes) + kept
 
     def _timed_draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
         """Each pass into the shared target, timed by its own query (``Renderer.stats['gpu_ms']``). When some pass
@@ -334,6 +337,7 @@ class Auto(Technique):
             self.prepared.release()
         self.prepared = None
         self._targets.release()
+        self._frame_sum.release()
         if hasattr(self, "_static_frame"):
             self._static_frame.release()
             self._static_view = None

@@ -28,6 +28,7 @@ used from that thread; from another, ``render``, ``set_camera`` and ``release`` 
 
 from __future__ import annotations
 
+import itertools
 import time
 from pathlib import Path
 from typing import Any
@@ -64,6 +65,7 @@ class Renderer:
         self._stale = True  # the technique must prepare (again) before the next frame
         self._accumulated: tuple | None = None  # progressive: the (seed, spp) of the frames summed on the GPU
         self._frames = 0  # frames in the current image
+        self._draw_ms = 0.0  # the last frame's draw, before any read-back
         self.stats: dict[str, Any] = {"prepare_ms": 0.0, "frame_ms": 0.0, "cpu_ms": 0.0, "image_ms": 0.0,
                                       "read_ms": 0.0, "gpu_ms": {}, "frames": 0, "prepares": 0}  # fmt: skip
         with turn(self._ctx):
@@ -81,14 +83,16 @@ class Renderer:
 
     def read(self) -> np.ndarray:
         """The last frame's image read back (float32 (H, W, 3), row 0 = top): the one read-back of a frame."""
-        if self._technique is None or self._frames == 0:
+        if self._technique is None:
+            raise ArgumentError("this Renderer was released", field="read")
+        if self._frames == 0:
             raise ArgumentError("no frame to read: call render_texture() or render() first", field="read")
         self._check_thread()
         t0 = time.perf_counter()
         with turn(self._ctx):
             array = self._technique.image(self._frames).read()
         self.stats["read_ms"] = 1e3 * (time.perf_counter() - t0)
-        self.stats["frame_ms"] += self.stats["read_ms"]
+        self.stats["frame_ms"] = self._draw_ms + self.stats["read_ms"]
         return array
 
     def render_texture(self, seed: int = 0, spp: int | None = None):
@@ -111,15 +115,20 @@ class Renderer:
         key = (int(seed), spp)
         technique = self._technique
         first = self._frames if technique.progressive and self._accumulated == key else 0
-        self._frames = first + technique.accumulate(size=self.size, seed=seed, spp=spp, first_frame=first)
+        try:
+            drawn = technique.accumulate(size=self.size, seed=seed, spp=spp, first_frame=first)
+            texture = technique.image(first + drawn).color
+        except BaseException:  # the GPU sum holds part of this call's frames: start again next time
+            self._frames, self._accumulated = 0, None
+            raise
+        self._frames = first + drawn
         self._accumulated = key if technique.progressive else None
-        texture = technique.image(self._frames).color
         timer = technique.timer
-        self.stats["frame_ms"] = 1e3 * (time.perf_counter() - t0)
-        drawn = slice(first - self._frames, None)  # this call's frames
-        self.stats["cpu_ms"] = sum(list(timer.cpu_ms)[drawn])  # their passes submitted
-        self.stats["image_ms"] = sum(list(timer.image_ms)[drawn])  # their image formed (llvmpipe waits there)
-        self.stats["gpu_ms"] = dict(timer.pass_gpu_ms)  # by pass, a few frames late (empty on llvmpipe)
+        self._draw_ms = 1e3 * (time.perf_counter() - t0)
+        self.stats["frame_ms"] = self._draw_ms
+        self.stats["cpu_ms"] = sum(itertools.islice(reversed(timer.cpu_ms), drawn))  # this call's passes submitted
+        self.stats["image_ms"] = sum(itertools.islice(reversed(timer.image_ms), drawn))  # its images formed
+        self.stats["gpu_ms"] = dict(timer.pass_gpu_ms)  # by pass, of a frame two frames back (none on llvmpipe)
         self.stats["read_ms"] = 0.0
         self.stats["frames"] = self._frames
         return texture

@@ -24,8 +24,9 @@ TECHNIQUES: dict[str, type[Technique]] = {}
 
 
 #: bytes per sample of a frame, an upper bound: the float32 RGBA colour and 32-bit depth of the drawn target (20 per
-#: sample), the frame sum and its mean on the GPU (20 each per pixel) and the read-back (16, and its RGB copy 12, per
-#: pixel). (80 was measured on llvmpipe at 2048² and 4096² when the frames were summed in float64 NumPy.)
+#: sample), the frame sum and its mean on the GPU (16 each per pixel) and the read-back (16, and its RGB copy 12, per
+#: pixel): 80 at one sample per pixel. Measured: 44.1 for one frame at one sample, whose image is the drawn target
+#: (``python tools/calibrate_memory.py``, llvmpipe, 1024² → 2048²)
 FRAME_BYTES_PER_SAMPLE = 80
 
 

@@ -34,6 +34,7 @@ from pydantic import Field
 
 from ..equirect import rotation_y
 from ..gpu import ProgramSpec, depth, get_program, release_objects, set_uniforms
+from ..gpu.frames import copy_image
 from ..gpu.targets import TargetCache
 from ..scene.camera import projection_matrix, view_eye
 from ..scene.emitters import area_light_samples, polygon_normal
@@ -532,9 +533,13 @@ class Forward(Technique):
             behind.depth.filter = moderngl.NEAREST, moderngl.NEAREST
             for texture in (behind.color, behind.depth):  # off the screen: its edge, not the other side
                 texture.repeat_x = texture.repeat_y = False
-        self.ctx.copy_framebuffer(behind.fbo, target.fbo)
+        ctx = self.ctx
+        copy_image(ctx, behind.fbo, target.size, target.color, target.depth)  # a depth blit: a CPU copy on llvmpipe
         behind.color.build_mipmaps()
-        target.bind()
+        target.bind()  # and the state of _draw_blended's transmissive draws again
+        ctx.enable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
+        ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE
+        ctx.depth_func = depth.NEARER
         return behind
 
     def _draw_extras(self, vp_bytes: bytes, view_proj: np.ndarray, background: bool) -> None:
@@ -601,6 +606,7 @@ class Forward(Technique):
             self.prepared.release()
         self._owns_prepared = False
         self._targets.release()
+        self._frame_sum.release()
         self._behind.release()
 
 

@@ -417,6 +417,7 @@ class ViewerController(Painting):
         renderer = Renderer(scene, method=name, size=size, **self.params)  # errors leave the old one in place
         self.renderer.release()
         self.renderer = renderer
+        self.texture, self._image = None, None  # the released renderer's frame
         self._camera_moved()
 
     def _on_shadows(self, on: bool) -> None:

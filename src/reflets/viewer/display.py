@@ -1,5 +1,6 @@
-"""The viewer's display pass: an HDR frame uploaded to a texture and drawn to the window, tone mapped on the
-GPU exactly as ``reflets.imageio.tonemap`` does on the CPU (so a window screenshot equals a rendered PNG)."""
+"""The viewer's display pass: an HDR frame — the renderer's texture as it is, or an array uploaded — drawn to the
+window, tone mapped on the GPU exactly as ``reflets.imageio.tonemap`` does on the CPU (so a window screenshot
+equals a rendered PNG)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ DISPLAY_PROGRAM = ProgramSpec(
 
 
 class Display:
-    """Draws float32 (H, W, 3) images into the current framebuffer of ``ctx``."""
+    """Draws HDR frames into the current framebuffer of ``ctx``: textures (``draw_texture``) or arrays (``draw``)."""
 
     def __init__(self, ctx):
         self.ctx = ctx

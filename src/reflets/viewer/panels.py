@@ -168,7 +168,7 @@ class Panels:
         status = c.status()
         imgui.set_next_window_pos(imgui.ImVec2(8, 330), imgui.Cond_.first_use_ever)
         imgui.begin("Frame")
-        imgui.text(f"{status['frame_ms']:.1f} ms (median)  {status['frames']} frame(s), {status['spp']} spp")
+        imgui.text(f"{status['frame_ms']:.1f} ms to draw (median)  {status['frames']} frame(s), {status['spp']} spp")
         gpu = f"  GPU {status['gpu_ms']:.2f} ms" if status["gpu_ms"] is not None else "  (no GPU timer here)"
         imgui.text(f"CPU {status['cpu_ms']:.1f} ms{gpu}")
         imgui.text(status["renderer"])

@@ -1,14 +1,15 @@
 """``reflets view``: a desktop window (moderngl-window's GLFW backend) over a :class:`ViewerController`.
 
-The window creates the OpenGL context and reflets draws in it (``reflets.gpu.use_context``): the renderer's
-frame is uploaded to a texture and tone mapped by the display pass. Input goes to the controller as the same
+The window creates the OpenGL context and reflets draws in it (``reflets.gpu.use_context``): the display pass
+tone maps the renderer's frame texture as it is (nothing read back; the reference, error and highlight views are
+arrays, uploaded). Input goes to the controller as the same
 events a script replays. Keys beyond the controller's: p saves a screenshot, t the scene (TOML, edits
 included), c the camera (JSON) — into the current folder under new names, never over a file; m cycles the
 method; x toggles shadows; v cycles image / reference / error (after g, which starts the reference); + / −
 change the exposure; b paints the selected mesh's highlight (bend; u undo, y redo); h hides the panels
 (viewer/panels.py: the same as widgets); Escape closes. Input over a panel is the panel's. The title shows the
-method, the median frame time, the accumulated frames, the GL renderer and the selection (and the reference's
-progress and relative MSE).
+method, the last frame's CPU time (its passes submitted) and GPU time (timer queries, a GPU's), the frames, the
+GL renderer and the selection (and the reference's progress and relative MSE).
 """
 
 from __future__ import annotations
