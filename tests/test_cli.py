@@ -296,3 +296,16 @@ def test_bench_refuses_a_results_folder_it_cannot_make_before_running(capsys, tm
     existing.write_text("mine")
     code, _, err = run_cli(capsys, "bench", "ibl", "-o", str(existing))
     assert code == 2 and existing.read_text() == "mine"
+
+
+@pytest.mark.parametrize(
+    "job",
+    [[], ["x"], ["[]"], ['{"scene": "nope"}'], ['{"scene": "showcase", "size": [0, 0], "frames": 1}'],
+     ['{"scene": "showcase", "size": [64, 48], "frames": 1e9}'], ["[" * 100_000]],
+)  # fmt: skip
+def test_bench_gpu_s_subprocess_refuses_a_job_it_cannot_read(capsys, job):
+    from reflets.bench.gpu import main
+
+    assert main(job) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("reflets.bench.gpu: ") and err.count("\n") == 1

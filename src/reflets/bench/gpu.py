@@ -24,12 +24,16 @@ there is no frame without read-back).
 
 from __future__ import annotations
 
+import json
 import statistics
+import subprocess
+import sys
 import time
 import warnings
 
 import numpy as np
 
+from .. import jsonio
 from ..diagnostics import RefletsWarning
 from ..gpu.context import is_software
 
@@ -96,26 +100,40 @@ def _loop(renderer, frames: int, mode: str, positions) -> dict:
 
 
 def _renderer_rows(frames: int, sizes, progress) -> list[dict]:
-    import reflets
-
+    """Each scene and size in a process of its own (a viewer's or a script's session: what one scene leaves in
+    the driver — llvmpipe places its waits differently after other scenes — does not reach the next row)."""
     rows = []
-    for label, make in _cases():
+    for label, _ in _cases():
         for size in sizes:
             progress(f"{label} {size[0]}×{size[1]}")
-            scene = make(size)
-            started = time.perf_counter()
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RefletsWarning)
-                renderer = reflets.Renderer(scene, size=size)
-            with renderer:
-                renderer.render()  # compiles the programs, draws what does not depend on the camera
-                prepare_ms = 1e3 * (time.perf_counter() - started)
-                positions = _orbit(scene.camera, frames)
-                for mode in ("orbit", "still", "orbit + read-back"):
-                    rows.append({"scene": label, "size": list(size), "prepare_ms": prepare_ms,
-                                 **_loop(renderer, frames, mode, positions)})  # fmt: skip
-                if label == "showcase":
-                    rows[-1]["pass_costs"] = _pass_costs(renderer, positions[0])
+            job = json.dumps({"scene": label, "size": list(size), "frames": frames})
+            done = subprocess.run([sys.executable, "-m", "reflets.bench.gpu", job], capture_output=True, text=True)
+            if done.returncode != 0:
+                raise RuntimeError(f"bench gpu, {label} {size}: {done.stderr.strip().splitlines()[-1:]}")
+            rows += json.loads(done.stdout.strip().splitlines()[-1])
+    return rows
+
+
+def _scene_rows(label: str, size: tuple[int, int], frames: int) -> list[dict]:
+    """One scene's rows (the subprocess's work): prepare, then each mode's frames."""
+    import reflets
+
+    make = dict(_cases())[label]
+    scene = make(size)
+    started = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RefletsWarning)
+        renderer = reflets.Renderer(scene, size=size)
+    rows = []
+    with renderer:
+        renderer.render()  # compiles the programs, draws what does not depend on the camera
+        prepare_ms = 1e3 * (time.perf_counter() - started)
+        positions = _orbit(scene.camera, frames)
+        for mode in ("orbit", "still", "orbit + read-back"):
+            rows.append({"scene": label, "size": list(size), "prepare_ms": prepare_ms,
+                         **_loop(renderer, frames, mode, positions)})  # fmt: skip
+        if label == "showcase":
+            rows[-1]["pass_costs"] = _pass_costs(renderer, positions[0])
     return rows
 
 
@@ -248,3 +266,30 @@ def bench_gpu(quick: bool, out_dir) -> tuple[dict, str]:
     results = {"device": device, "software": software, "frames": frames, "rows": rows, "small": small, "ar": ar_rows,
                "ar_missing": ar_missing, "wall_s": time.perf_counter() - started}  # fmt: skip
     return results, "\n".join(md)
+
+
+def main(argv: list[str]) -> int:
+    """The benchmark's subprocess: one scene's rows as one JSON line; a job it cannot read: one line, exit 2."""
+    scenes = [label for label, _ in _cases()]
+    try:
+        if len(argv) != 1:
+            raise ValueError('usage: python -m reflets.bench.gpu \'{"scene": …, "size": [w, h], "frames": n}\'')
+        job = json.loads(argv[0])
+        if not isinstance(job, dict) or job.get("scene") not in scenes:
+            raise ValueError(f"a job is an object whose 'scene' is one of: {', '.join(scenes)}")
+        size, frames = job.get("size"), job.get("frames")
+        sizes_ok = isinstance(size, list) and len(size) == 2
+        if not (sizes_ok and all(isinstance(v, int) and 16 <= v <= 4096 for v in size)):
+            raise ValueError("'size' is [width, height], 16…4096 each")
+        if not (isinstance(frames, int) and 1 <= frames <= 1000):
+            raise ValueError("'frames' is an integer in 1…1000")
+    except (ValueError, RecursionError) as exc:
+        print(f"reflets.bench.gpu: {exc}", file=sys.stderr)
+        return 2
+    rows = _scene_rows(job["scene"], tuple(size), frames)
+    print(jsonio.dumps(rows))  # strict JSON: a pass not drawn (NaN) is null
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
