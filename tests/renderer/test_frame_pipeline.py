@@ -5,6 +5,8 @@ that do not depend on the camera are drawn again only when what they depend on c
 from __future__ import annotations
 
 import collections
+import subprocess
+import sys
 
 import moderngl
 import numpy as np
@@ -35,8 +37,8 @@ def gl_syncs(monkeypatch):
 
     for cls, name in ((moderngl.Context, "finish"), (moderngl.Framebuffer, "read"), (moderngl.Texture, "read"),
                       (moderngl.Buffer, "read"), (moderngl.Buffer, "read_into"), (moderngl.Texture, "read_into"),
-                      (moderngl.Framebuffer, "read_into")):  # fmt: skip
-        counting(cls, name)
+                      (moderngl.Framebuffer, "read_into"), (moderngl.Context, "copy_framebuffer")):  # fmt: skip
+        counting(cls, name)  # (a blit of depth is a CPU copy on llvmpipe: it waits for what was drawn)
     return counts
 
 
@@ -155,20 +157,24 @@ def test_camera_independent_passes_are_drawn_once(ctx, monkeypatch):
         assert drawn["shadow views"] - prepared["shadow views"] == cascades  # the cascades alone
 
 
-def test_a_showcase_frame_submits_in_a_few_milliseconds(ctx):
+def test_a_showcase_frame_submits_in_a_few_milliseconds():
     """The issue's bound: the showcase's cpu_ms (its passes submitted: Python and driver work, the waits of
     llvmpipe for a texture a pass reads back included) at 64 × 48 is at most 5 ms — frames after the first from
-    one view, whose static parts are kept (measured here: about 0.5 ms; a camera move solves and draws again)."""
-    import statistics
-
-    scene = load_scene(scene_path("60_showcase.toml"))
-    with reflets.Renderer(scene, size=SIZE) as renderer:
-        renderer.render_texture()
-        cpu = []
-        for _ in range(15):
-            renderer.render_texture()
-            cpu.append(renderer.stats["cpu_ms"])
-    assert statistics.median(cpu) <= 5.0, cpu
+    one view, whose static parts are kept (measured: about 0.5 ms; a camera move solves and draws again). In a
+    process of its own: where llvmpipe waits depends on what the process drew before (docs/performance.md)."""
+    code = (
+        "import statistics, reflets\n"
+        "from reflets.demo import scene_path\n"
+        f"with reflets.Renderer(reflets.load_scene(scene_path('60_showcase.toml')), size={SIZE}) as r:\n"
+        "    r.render_texture()\n"
+        "    cpu = []\n"
+        "    for _ in range(15):\n"
+        "        r.render_texture(); cpu.append(r.stats['cpu_ms'])\n"
+        "print(statistics.median(cpu))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert float(done.stdout.strip().splitlines()[-1]) <= 5.0
 
 
 def test_frames_summed_in_blocks_give_the_mean_of_all_frames(ctx, monkeypatch):
@@ -178,10 +184,82 @@ def test_frames_summed_in_blocks_give_the_mean_of_all_frames(ctx, monkeypatch):
 
     scene = sphere_scene("lambert", "quad", size=(32, 24))
     one_shot = reflets.render(scene, method="mc", samples=4, seed=3, spp=20)  # five frames, one block
+    two_frames = reflets.render(scene, method="mc", samples=4, seed=4, spp=8)
     monkeypatch.setattr(frames, "BLOCK", 2)
     with reflets.Renderer(scene, method="mc", samples=4) as renderer:
         for _ in range(5):
             image = renderer.render(seed=3)
         assert renderer.stats["frames"] == 5
-    np.testing.assert_allclose(image, one_shot, rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(image, one_shot, rtol=1e-5, atol=1e-7)
+        for _ in range(2):  # a new seed starts again: the full blocks of the first sum are gone
+            image = renderer.render(seed=4)
+        np.testing.assert_allclose(image, two_frames, rtol=1e-5, atol=1e-7)
     assert one_shot.std() > 0.0
+
+
+def _plain_frame(self, target, view_proj, vp_bytes, frame, seed):
+    """auto's frame drawn the simple way: cleared, then every pass whole, in order."""
+    color = self.scene.background_color()
+    target.use(clear=(*(color or (0.0, 0.0, 0.0)), 1.0))
+    for _, technique in self.passes:
+        technique._draw(target, view_proj, vp_bytes, frame, seed)
+
+
+def test_keeping_the_static_parts_changes_no_pixel(ctx, monkeypatch):
+    """A progressive showcase (the scratch lobes; Fermat reflecting the scratched plate): the frames auto makes
+    by drawing the static parts once and the changing parts after them equal the frames drawn whole, pass after
+    pass — after a camera move too."""
+    from reflets.renderer.compose import Auto
+
+    scene = load_scene(scene_path("60_showcase.toml"))
+
+    def frames() -> list[np.ndarray]:
+        with reflets.Renderer(scene, size=SIZE) as renderer:
+            images = [renderer.render() for _ in range(3)]
+            renderer.set_camera(position=(0.6, 1.4, 4.0))
+            return [*images, renderer.render(), renderer.render()]
+
+    kept = frames()
+    monkeypatch.setattr(Auto, "_timed_draw", _plain_frame)
+    whole = frames()
+    for a, b in zip(kept, whole, strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-6)
+    assert np.abs(kept[0] - kept[2]).max() > 0.0  # the frames do accumulate new samples
+
+
+def test_a_still_frame_draws_no_static_part_and_solves_nothing(ctx, monkeypatch):
+    """Counted, not timed: a frame from an unchanged view draws no static part and runs no Fermat solve; a
+    camera move solves every reflected mesh once, and its image is the one-shot render's."""
+    from reflets.reflections.technique import Fermat
+    from reflets.techniques.base import Technique
+
+    calls: collections.Counter = collections.Counter()
+
+    def counted(cls, name, what):
+        original = getattr(cls, name)
+
+        def wrapper(self, *args, **kwargs):
+            calls[what] += 1
+            return original(self, *args, **kwargs)
+
+        monkeypatch.setattr(cls, name, wrapper)
+
+    counted(Technique, "_draw_static", "static")
+    counted(Fermat, "_draw_static", "static")
+    counted(moderngl.VertexArray, "transform", "solve")
+    scene = load_scene(scene_path("60_showcase.toml"))
+    with reflets.Renderer(scene, size=SIZE) as renderer:
+        renderer.render_texture()
+        fermat = next(t for method, t in renderer._technique.passes if method == "fermat")
+        solves = sum(len(s) for s in fermat._solves)
+        assert solves > 0
+        calls.clear()
+        for _ in range(3):
+            renderer.render_texture()
+        assert calls == {}, calls
+        renderer.set_camera(position=(0.6, 1.4, 4.0))
+        image = renderer.render()
+        assert not renderer._technique._late  # (the showcase has no pass drawn whole after the changing ones)
+        assert calls["solve"] == solves and calls["static"] == len(renderer._technique.passes), calls
+        fresh = reflets.render(renderer.scene, size=SIZE)
+    np.testing.assert_allclose(image, fresh, rtol=1e-5, atol=1e-6)

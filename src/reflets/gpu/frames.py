@@ -18,8 +18,9 @@ from .targets import HDRTarget
 FULLSCREEN = "reflets/gpu/shaders/fullscreen.vert"
 FRAME_SUM_PROGRAM = ProgramSpec("frame_sum", vertex=FULLSCREEN, fragment="reflets/gpu/shaders/frame_sum.frag")
 COPY_PROGRAM = ProgramSpec("copy_image", vertex=FULLSCREEN, fragment="reflets/gpu/shaders/copy_image.frag")
-#: the texture unit the frame is read from
-UNIT = 0
+#: the texture units a pass here reads its images from: above every unit the passes use (a target still bound at
+#: unit 0 or 1 while a later pass draws into it would be a feedback loop for any sampler left at its default)
+UNIT = 62
 #: frames summed before the block goes to the total (see FrameSum)
 BLOCK = 1024
 
@@ -49,7 +50,9 @@ class FrameSum:
             self._direct = target
             return
         width, height = target.size[0] // side, target.size[1] // side
-        if first or self._block is None or self._block.size != (width, height):
+        if not first and (self._block is None or self._block.size != (width, height)):
+            raise RuntimeError("a frame added to a sum of another size: start it again (first=True)")
+        if first:
             self._block = self._sized(self._block, width, height)
             self._release_total()
             self._block.use(clear=(0.0, 0.0, 0.0, 1.0))

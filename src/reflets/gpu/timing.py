@@ -24,7 +24,8 @@ from contextlib import contextmanager
 
 from .context import is_software
 
-#: frames between a pass's query and its read: the GPU has finished a frame two frames back
+#: frames between a frame and the read of its queries (at the start of frame n, frame n − LAG's): the GPU has
+#: long finished it (it can still wait if the GPU is further behind: moderngl cannot ask whether it is ready)
 LAG = 2
 #: frame times kept (a viewer runs for hours: the lists are bounded)
 HISTORY = 10_000
@@ -53,6 +54,7 @@ class FrameTimer:
         self.wall_ms: deque[float] = deque(maxlen=HISTORY)
         self.image_ms: deque[float] = deque(maxlen=HISTORY)
         self.pass_gpu_ms: dict[str, float] = {}
+        self.pass_history: deque[dict[str, float]] = deque(maxlen=HISTORY)  # pass_gpu_ms of each frame read
         self._free: list = []  # queries to reuse (moderngl's Query has no release())
         self._pending: deque[list[tuple[str, object]]] = deque()
         self._current: list[tuple[str, object]] | None = None
@@ -63,7 +65,7 @@ class FrameTimer:
         ``submitted()`` ends ``cpu_ms`` there (what follows — forming the image — goes to ``image_ms``)."""
         if self.sync:
             self.ctx.finish()
-        self._read(keep=LAG)
+        self._read(keep=LAG - 1)
         self._current = []
         handle = _Frame(time.perf_counter())
         try:
@@ -101,6 +103,7 @@ class FrameTimer:
                 passes[name] = passes.get(name, 0.0) + query.elapsed / 1e6
                 self._free.append(query)
             self.pass_gpu_ms = passes
+            self.pass_history.append(passes)
             self.gpu_ms.append(sum(passes.values()))
 
     def flush(self) -> None:
@@ -112,7 +115,7 @@ class FrameTimer:
         """Time the frames drawn inside, for a benchmark: the lists restart; on a GPU the queries alone (read at
         the end), on llvmpipe a ``finish()`` around each frame. ``frame_times()`` then gives one time per frame."""
         self.flush()
-        for times in (self.cpu_ms, self.gpu_ms, self.wall_ms, self.image_ms):
+        for times in (self.cpu_ms, self.gpu_ms, self.wall_ms, self.image_ms, self.pass_history):
             times.clear()
         self.sync = not self.gpu_timers
         try:
