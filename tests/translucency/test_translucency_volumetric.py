@@ -8,7 +8,7 @@ import pytest
 
 import reflets
 from reflets.errors import ArgumentError
-from reflets.reference.volumetric import render_volumetric
+from reflets.reference.volumetric import render_volumetric, sample_blocks
 from reflets.translucency import half_space_single_scattering
 
 
@@ -108,15 +108,19 @@ def test_a_sky_of_one_bright_texel_is_the_directional_light_from_it(eta, tmp_pat
 
 @pytest.mark.slow
 @pytest.mark.parametrize("eta", [1.0, 1.3])
-def test_worker_processes_draw_an_equivalent_reproducible_reference(eta):
-    """Samples split over two processes: the same seed gives the same image, and it agrees with the one-process
-    image within their noise (means within 4σ of the difference)."""
+def test_worker_processes_draw_the_one_process_reference_bit_for_bit(eta):
+    """Samples split over two or three processes: the same seed gives the one-process image and standard error
+    bit for bit (blocks fixed by spp and the pixels, their sums added in block order), and another seed agrees
+    within the noise (means within 4σ of the difference)."""
     scene = sphere_scene(eta)
     a = render_volumetric(scene, spp=8, seed=3, size=(24, 18), workers=2, progress=False)
-    b = render_volumetric(scene, spp=8, seed=3, size=(24, 18), workers=2, progress=False)
+    b = render_volumetric(scene, spp=8, seed=3, size=(24, 18), workers=3, progress=False)
+    same = render_volumetric(scene, spp=8, seed=3, size=(24, 18), progress=False)
     one = render_volumetric(scene, spp=8, seed=5, size=(24, 18), progress=False)
-    np.testing.assert_array_equal(a.image, b.image)
-    assert np.array_equal(a.mask, one.mask) and a.spp == 8
+    for other in (b, same):
+        np.testing.assert_array_equal(a.image, other.image)
+        np.testing.assert_array_equal(a.stderr, other.stderr)
+    assert np.array_equal(a.mask, one.mask) and a.spp == 8 and len(sample_blocks(8, int(a.mask.sum()))) == 8
     m = a.mask
     diff = a.image[m].mean(axis=0) - one.image[m].mean(axis=0)
     sigma = np.sqrt(np.mean(a.stderr[m] ** 2 + one.stderr[m] ** 2, axis=0) / m.sum())

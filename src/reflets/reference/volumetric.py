@@ -316,21 +316,25 @@ def render_volumetric(
     that leaves the medium towards the camera: the technique's ``single`` + ``multiple`` terms). ``orders``
     caps the scattering events per path (1: single scattering only).
 
-    ``workers > 1`` splits the samples over that many processes (a reference at the document's 1024×768 takes
-    an hour of one core): each block of samples draws from its own child of ``seed``'s SeedSequence
-    (reproducible for a given ``seed``, ``spp`` and ``workers``)."""
+    The samples are drawn in blocks (:func:`sample_blocks`: fixed by ``spp`` and the pixels, never by the
+    workers), each from its own child of ``seed``'s SeedSequence, and their sums added in block order:
+    ``workers > 1`` shares the blocks between that many processes (a reference at the document's 1024×768 takes
+    an hour of one core) and gives the same image and standard error, bit for bit, as one."""
     if size is not None:
         scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"size": tuple(size)})})
     _check_memory(scene, workers, refract)
     job = _VolumetricJob(scene, refract, orders)
+    blocks = sample_blocks(spp, len(job.pix))
+    seeds = np.random.SeedSequence(seed).spawn(len(blocks))
     if workers > 1:
-        # samples per task: what one batch holds, and at least four tasks per worker
-        block = max(1, min(_samples_per_batch(len(job.pix)), -(-spp // (4 * workers))))
-        total, total2 = _sums_in_processes(scene, refract, orders, spp, block, seed, workers, progress)
+        total, total2 = _sums_in_processes(scene, refract, orders, blocks, seeds, workers, progress)
     else:
+        total = total2 = 0.0
         with Progress(disable=not progress, transient=True) as bar:
             task = bar.add_task(job.label, total=spp)
-            total, total2 = job.sums(spp, np.random.default_rng(seed), lambda k: bar.advance(task, k))
+            for samples, block_seed in zip(blocks, seeds, strict=True):  # the processes' blocks, in order
+                t, t2 = job.sums(samples, np.random.default_rng(block_seed), lambda k: bar.advance(task, k))
+                total, total2 = total + t, total2 + t2
     # an albedo map: the light leaving the medium towards the camera × its texel where it leaves (the camera hit)
     tint = job.material.tint(job.geometry.uv_sets(job.hits.prim[job.pix], job.hits.u[job.pix], job.hits.v[job.pix]))
     mean = total / spp * tint
@@ -459,15 +463,23 @@ def _worker_sums(spp: int, seed) -> tuple[int, np.ndarray, np.ndarray]:
     return spp, total, total2
 
 
-def _sums_in_processes(scene, refract, orders, spp: int, block: int, seed: int, workers: int, progress: bool):
-    """Σ and Σ² over ``spp`` samples drawn in ``workers`` processes, in blocks of ``block`` samples, each with
-    its own seed."""
+def sample_blocks(spp: int, pixels: int) -> list[int]:
+    """How ``spp`` samples are split into tasks: at most what one batch holds (``_samples_per_batch``), and at
+    least eight tasks when there are samples enough — from ``spp`` and the pixels alone, so that the image does
+    not depend on how many processes share them."""
+    block = max(1, min(_samples_per_batch(pixels), -(-spp // 8)))
+    return [min(block, spp - start) for start in range(0, spp, block)]
+
+
+def _sums_in_processes(scene, refract, orders, blocks: list[int], seeds, workers: int, progress: bool):
+    """Σ and Σ² over the blocks of samples drawn in ``workers`` processes, each block with its own seed, added in
+    block order whatever order they finish in (floating-point sums then equal one process's, bit for bit)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    blocks = [min(block, spp - start) for start in range(0, spp, block)]
-    seeds = np.random.SeedSequence(seed).spawn(len(blocks))
     total = total2 = 0.0
+    done: dict[int, tuple] = {}
+    next_block = 0
     # fork where there is one: scripts and notebooks without a __main__ guard work (the workers touch no GL)
     context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
     with (
@@ -476,12 +488,17 @@ def _sums_in_processes(scene, refract, orders, spp: int, block: int, seed: int, 
         ) as pool,
         Progress(disable=not progress, transient=True) as bar,
     ):
-        task = bar.add_task(f"volumetric reference ({workers} processes)", total=spp)
-        for future in as_completed([pool.submit(_worker_sums, k, s) for k, s in zip(blocks, seeds, strict=True)]):
+        task = bar.add_task(f"volumetric reference ({workers} processes)", total=sum(blocks))
+        tasks = enumerate(zip(blocks, seeds, strict=True))
+        futures = {pool.submit(_worker_sums, k, s): index for index, (k, s) in tasks}
+        for future in as_completed(futures):
             k, t, t2 = future.result()
-            total = total + t
-            total2 = total2 + t2
+            done[futures[future]] = (t, t2)
             bar.advance(task, k)
+            while next_block in done:
+                t, t2 = done.pop(next_block)
+                total, total2 = total + t, total2 + t2
+                next_block += 1
     return total, total2
 
 
