@@ -350,6 +350,17 @@ def cmd_reference(args) -> int:
     inputs = scene.input_files() | {Path(args.scene)}
     for path in (out, stderr_path):
         check_not_input(path, inputs)
+    checkpoint = None
+    if args.engine == "volumetric":  # a long run keeps its partial sums next to its output
+        checkpoint = out.with_name(out.name + ".partial.npz")
+        if checkpoint.exists() and not args.resume:
+            raise OutputError("partial sums of an interrupted reference are there: --resume to go on from them, or "
+                              "delete them", file=checkpoint)  # fmt: skip
+        if args.resume and not checkpoint.exists():
+            raise ArgumentError(f"nothing to resume: {checkpoint} does not exist", field="--resume")
+    elif args.resume or args.target_error is not None:
+        raise ArgumentError("--resume and --target-error are the volumetric engine's (--engine volumetric)",
+                            field="--resume" if args.resume else "--target-error")  # fmt: skip
     result = reference(
         scene,
         spp=args.spp,
@@ -361,6 +372,8 @@ def cmd_reference(args) -> int:
         heuristic=args.mis,
         progress=not args.quiet,
         workers=args.workers,
+        checkpoint=checkpoint,
+        target_error=args.target_error,
     )
     write_image(out, result.image)
     if result.engine != "mitsuba":
@@ -665,7 +678,12 @@ def build_parser() -> argparse.ArgumentParser:
         default="numpy",
         help="numpy (direct lighting, default), mitsuba, or volumetric (translucent media, all scattering orders)",
     )
-    p.add_argument("--workers", type=int, default=1, help="processes sharing the samples (volumetric engine)")
+    p.add_argument("--workers", type=int, default=1, help="processes sharing the samples (volumetric engine; the "
+                   "same image for any number)")  # fmt: skip
+    p.add_argument("--resume", action="store_true", help="volumetric engine: go on from OUTPUT.partial.npz, the "
+                   "partial sums a killed run left (the image of an uninterrupted run)")  # fmt: skip
+    p.add_argument("--target-error", type=float, default=None, help="volumetric engine: stop when the mean relative "
+                   "standard error is at most this (0 < E < 1)")  # fmt: skip
     p.add_argument("--visibility", choices=["on", "off"], default="on", help="shadows (default on)")
     p.add_argument(
         "--pixel",

@@ -32,6 +32,8 @@ def reference(
     workers: int = 1,
     adaptive_error: float | None = None,
     adaptive_spp: int = 16384,
+    checkpoint: str | Path | None = None,
+    target_error: float | None = None,
 ) -> ReferenceResult:
     """Render a ground-truth image of ``scene`` (direct lighting only, like every reflets technique; the
     volumetric engine: all orders of scattering inside a translucent medium).
@@ -44,7 +46,9 @@ def reference(
         translucent medium inside its smooth boundary, one point, directional, quad, polygon or environment light: the
         ``translucent`` technique's single + multiple scattering, reflets.reference.volumetric; pixel centres, with
         shadows)
-    workers : processes sharing the samples (volumetric engine)
+    workers : processes sharing the samples (volumetric engine: the same image for any number)
+    checkpoint, target_error : (volumetric engine) a file of the partial sums to go on from after a kill, and the
+        mean relative standard error to stop at (reflets.reference.volumetric.render_volumetric)
     visibility : shadows on (ray-cast occlusion) or off (the area-light document's unoccluded setting)
     pixel : "center" samples the pixel centre like the GPU renderer; "box" averages over the pixel
     heuristic : MIS weights, "power" (β = 2) or "balance"
@@ -58,6 +62,9 @@ def reference(
     size = check_size(size)
     if workers < 1:
         raise ArgumentError(f"workers must be at least 1 (got {workers})", field="workers")
+    if engine != "volumetric" and (checkpoint is not None or target_error is not None):
+        raise ArgumentError("checkpoints and a target error are the volumetric engine's (--engine volumetric)",
+                            field="checkpoint" if checkpoint is not None else "target_error")  # fmt: skip
     if engine == "numpy":
         return MonteCarloReference(scene, visibility=visibility, heuristic=heuristic).render(
             spp, seed=seed, size=size, pixel=pixel, progress=progress, adaptive_error=adaptive_error,
@@ -90,8 +97,10 @@ def reference(
                 field="engine",
             )
         start = time.perf_counter()
-        result = render_volumetric(scene, spp=spp, seed=seed, size=size, progress=progress, workers=workers)
-        return ReferenceResult(result.image, result.stderr, spp, time.perf_counter() - start, engine="volumetric")
+        result = render_volumetric(scene, spp=spp, seed=seed, size=size, progress=progress, workers=workers,
+                                   checkpoint=checkpoint, target_error=target_error)  # fmt: skip
+        return ReferenceResult(result.image, result.stderr, result.spp, time.perf_counter() - start,
+                               engine="volumetric")  # fmt: skip
     raise ArgumentError(f"unknown engine '{engine}'; allowed: {', '.join(ENGINES)}", field="engine")
 
 

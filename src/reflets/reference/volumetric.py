@@ -21,11 +21,13 @@ point is found by Newton's method, and its flux density there from the beam's cr
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
-from rich.progress import Progress
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
 from ..brdf.base import orthonormal_basis
+from ..errors import ArgumentError
 from ..translucency.medium import Medium
 from ..translucency.optics import (
     fresnel_reflectance,
@@ -34,6 +36,7 @@ from ..translucency.optics import (
     refracted_cos,
     sample_henyey_greenstein,
 )
+from .checkpoint import PartialSums, reference_key
 
 
 @dataclass
@@ -298,6 +301,8 @@ def render_volumetric(
     refract: bool | None = None,
     orders: int | None = None,
     workers: int = 1,
+    checkpoint: str | Path | None = None,
+    target_error: float | None = None,
 ) -> VolumetricImage:
     """Volumetric path tracing of a homogeneous translucent medium inside the scene's closed meshes, lit by one
     point, directional, quad, polygon or environment light (an emitter's points sampled uniformly over its area,
@@ -319,24 +324,31 @@ def render_volumetric(
     The samples are drawn in blocks (:func:`sample_blocks`: fixed by ``spp`` and the pixels, never by the
     workers), each from its own child of ``seed``'s SeedSequence, and their sums added in block order:
     ``workers > 1`` shares the blocks between that many processes (a reference at the document's 1024×768 takes
-    an hour of one core) and gives the same image and standard error, bit for bit, as one."""
+    an hour of one core) and gives the same image and standard error, bit for bit, as one.
+
+    ``checkpoint``: an ``.npz`` file the partial sums are written to as the blocks complete
+    (:mod:`reflets.reference.checkpoint`); when it exists, the run goes on from it (a kill or a crash loses at most
+    the blocks of the last seconds) and ends in the uninterrupted run's image; removed at the end.
+    ``target_error``: stop after the first block at which the mean relative standard error of the object's pixels
+    (luminance) is at most this (``result.spp``: the samples taken) — the same block for any number of workers."""
     if size is not None:
         scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"size": tuple(size)})})
     _check_memory(scene, workers, refract)
+    if target_error is not None and not (isinstance(target_error, int | float) and 0 < target_error < 1):
+        raise ArgumentError(f"must be a number in (0, 1), got {target_error!r}", field="target_error")
     job = _VolumetricJob(scene, refract, orders)
     blocks = sample_blocks(spp, len(job.pix))
     seeds = np.random.SeedSequence(seed).spawn(len(blocks))
-    if workers > 1:
-        total, total2 = _sums_in_processes(scene, refract, orders, blocks, seeds, workers, progress)
-    else:
-        total = total2 = 0.0
-        with Progress(disable=not progress, transient=True) as bar:
-            task = bar.add_task(job.label, total=spp)
-            for samples, block_seed in zip(blocks, seeds, strict=True):  # the processes' blocks, in order
-                t, t2 = job.sums(samples, np.random.default_rng(block_seed), lambda k: bar.advance(task, k))
-                total, total2 = total + t, total2 + t2
+    partial = None
+    if checkpoint is not None:
+        key = reference_key(scene, engine="volumetric", spp=spp, seed=seed, refract=refract, orders=orders,
+                            blocks=blocks)  # fmt: skip
+        partial = PartialSums(checkpoint, key)
     # an albedo map: the light leaving the medium towards the camera × its texel where it leaves (the camera hit)
     tint = job.material.tint(job.geometry.uv_sets(job.hits.prim[job.pix], job.hits.u[job.pix], job.hits.v[job.pix]))
+    runner = _BlockRunner(job, blocks, seeds, tint, partial, target_error)
+    runner.run(scene, refract, orders, workers, progress)
+    total, total2, spp = runner.total, runner.total2, runner.samples
     mean = total / spp * tint
     var = np.maximum(total2 / spp - (total / spp) ** 2, 0.0) / max(spp - 1, 1) * tint**2
     h, w = job.shape
@@ -471,35 +483,87 @@ def sample_blocks(spp: int, pixels: int) -> list[int]:
     return [min(block, spp - start) for start in range(0, spp, block)]
 
 
-def _sums_in_processes(scene, refract, orders, blocks: list[int], seeds, workers: int, progress: bool):
-    """Σ and Σ² over the blocks of samples drawn in ``workers`` processes, each block with its own seed, added in
-    block order whatever order they finish in (floating-point sums then equal one process's, bit for bit)."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+class _BlockRunner:
+    """Runs a reference's blocks of samples — in this process or in ``workers`` others — and adds their sums in
+    block order, whatever order they finish in (so that the floating-point sums equal one process's, bit for bit);
+    goes on from a checkpoint, writes it as it goes, stops at a target error, shows the samples done, the time left
+    and the current error."""
 
-    total = total2 = 0.0
-    done: dict[int, tuple] = {}
-    next_block = 0
-    # fork where there is one: scripts and notebooks without a __main__ guard work (the workers touch no GL)
-    context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    with (
-        ProcessPoolExecutor(
-            workers, mp_context=context, initializer=_init_worker, initargs=(scene, refract, orders)
-        ) as pool,
-        Progress(disable=not progress, transient=True) as bar,
-    ):
-        task = bar.add_task(f"volumetric reference ({workers} processes)", total=sum(blocks))
-        tasks = enumerate(zip(blocks, seeds, strict=True))
-        futures = {pool.submit(_worker_sums, k, s): index for index, (k, s) in tasks}
-        for future in as_completed(futures):
-            k, t, t2 = future.result()
-            done[futures[future]] = (t, t2)
-            bar.advance(task, k)
-            while next_block in done:
-                t, t2 = done.pop(next_block)
-                total, total2 = total + t, total2 + t2
-                next_block += 1
-    return total, total2
+    def __init__(self, job, blocks: list[int], seeds, tint, partial: PartialSums | None, target: float | None):
+        self.job, self.blocks, self.seeds, self.tint = job, blocks, seeds, tint
+        self.partial, self.target = partial, target
+        self.next_block, self.total, self.total2 = partial.load() if partial is not None else (0, 0.0, 0.0)
+        if self.next_block > len(blocks):
+            raise ArgumentError("holds more blocks than this reference has", file=partial.path, field="--resume")
+
+    @property
+    def samples(self) -> int:
+        return sum(self.blocks[: self.next_block])
+
+    def error(self) -> float:
+        """The mean relative standard error (luminance) of the object's pixels after the blocks added so far."""
+        n = self.samples
+        if n < 2 or np.ndim(self.total) == 0:
+            return float("inf")
+        mean = self.total / n * self.tint
+        var = np.maximum(self.total2 / n - (self.total / n) ** 2, 0.0) / (n - 1) * self.tint**2
+        weights = np.array([0.2126, 0.7152, 0.0722])
+        lum, err = mean @ weights, np.sqrt(var) @ weights
+        seen = lum > 0
+        return float(np.mean(err[seen] / lum[seen])) if seen.any() else 0.0
+
+    def _add(self, t, t2) -> bool:
+        """Add the next block's sums; True when the run is done (every block, or the target error reached)."""
+        self.total, self.total2 = self.total + t, self.total2 + t2
+        self.next_block += 1
+        done = self.next_block == len(self.blocks) or (self.target is not None and self.error() <= self.target)
+        if self.partial is not None and not done:
+            self.partial.save(self.next_block, self.total, self.total2)
+        return done
+
+    def run(self, scene, refract, orders, workers: int, progress: bool) -> None:
+        todo = list(range(self.next_block, len(self.blocks)))
+        label = self.job.label + (f" ({workers} processes)" if workers > 1 else "")
+        with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
+                      TimeRemainingColumn(), TextColumn("{task.fields[error]}"), disable=not progress,
+                      transient=True) as bar:  # fmt: skip
+            task = bar.add_task(label, total=sum(self.blocks), completed=self.samples, error="")
+
+            def added(t, t2) -> bool:
+                done = self._add(t, t2)
+                bar.update(task, completed=self.samples, error=f"σ/μ {self.error():.3g}")
+                return done
+
+            if not todo or (self.target is not None and self.error() <= self.target):
+                pass  # a checkpoint of a finished run
+            elif workers > 1:
+                self._in_processes(todo, scene, refract, orders, workers, added)
+            else:
+                for index in todo:
+                    t, t2 = self.job.sums(self.blocks[index], np.random.default_rng(self.seeds[index]), lambda k: None)
+                    if added(t, t2):
+                        break
+        if self.partial is not None:
+            self.partial.remove()
+
+    def _in_processes(self, todo: list[int], scene, refract, orders, workers: int, added) -> None:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        done: dict[int, tuple] = {}
+        # fork where there is one: scripts and notebooks without a __main__ guard work (the workers touch no GL)
+        context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+        with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker,
+                                 initargs=(scene, refract, orders)) as pool:  # fmt: skip
+            futures = {pool.submit(_worker_sums, self.blocks[i], self.seeds[i]): i for i in todo}
+            for future in as_completed(futures):
+                _, t, t2 = future.result()
+                done[futures[future]] = (t, t2)
+                while self.next_block in done:
+                    if added(*done.pop(self.next_block)):
+                        for other in futures:
+                            other.cancel()
+                        return
 
 
 # ------------------------------------------------------------------------------ refracting boundary (η ≠ 1)

@@ -1,0 +1,109 @@
+"""Long references a person can live with (the volumetric engine): a run killed half-way and resumed from its
+checkpoint ends in the uninterrupted image bit for bit, in one process or several; a target error stops it early,
+at the same block for any number of processes; the checkpoint of another reference is refused; the CLI keeps an
+interrupted run's partial sums and never overwrites them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import reflets
+from reflets.errors import ArgumentError
+from reflets.reference import checkpoint as checkpoints
+from reflets.reference import volumetric
+from reflets.reference.volumetric import render_volumetric
+
+SCENE = {
+    "camera": {"position": [0, 0.5, 3], "look_at": [0, 0, 0], "fov_y": 35, "size": [16, 12]},
+    "materials": {"skin": {"type": "translucent", "preset": "skin1", "eta": 1.0, "mm_per_unit": 25.0}},
+    "mesh": [{"shape": "sphere", "radius": 1.0, "material": "skin"}],
+    "light": [{"type": "point", "position": [2, 3, 2], "intensity": [20, 20, 20]}],
+}
+
+
+def _crash_after(monkeypatch, blocks: int) -> None:
+    """Make this process's walk fail after ``blocks`` blocks (a kill half-way)."""
+    original, calls = volumetric._VolumetricJob.sums, []
+
+    def sums(self, *args):
+        if len(calls) == blocks:
+            raise KeyboardInterrupt
+        calls.append(1)
+        return original(self, *args)
+
+    monkeypatch.setattr(volumetric._VolumetricJob, "sums", sums)
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_killed_run_resumed_gives_the_uninterrupted_image(tmp_path, monkeypatch, workers):
+    scene = reflets.load_dict(SCENE)
+    whole = render_volumetric(scene, spp=8, seed=2, progress=False)
+    saved = tmp_path / "ref.partial.npz"
+    monkeypatch.setattr(checkpoints, "SAVE_EVERY_S", 0.0)
+    with monkeypatch.context() as crashing:
+        _crash_after(crashing, 3)
+        with pytest.raises(KeyboardInterrupt):
+            render_volumetric(scene, spp=8, seed=2, progress=False, checkpoint=saved)
+    with np.load(saved) as data:
+        assert int(data["next_block"]) == 3  # the blocks done before the kill
+    resumed = render_volumetric(scene, spp=8, seed=2, progress=False, checkpoint=saved, workers=workers)
+    np.testing.assert_array_equal(resumed.image, whole.image)
+    np.testing.assert_array_equal(resumed.stderr, whole.stderr)
+    assert resumed.spp == 8 and not saved.exists()  # the finished run's partial sums are gone
+
+
+def test_a_target_error_stops_at_the_same_block_in_any_number_of_processes():
+    scene = reflets.load_dict(SCENE)
+    full = render_volumetric(scene, spp=64, seed=1, progress=False)
+    m = full.mask
+    full_error = float(np.mean(full.stderr[m].mean(axis=1) / full.image[m].mean(axis=1)))
+    target = 2.0 * full_error  # reached after about a quarter of the samples
+    one = render_volumetric(scene, spp=64, seed=1, progress=False, target_error=target)
+    two = render_volumetric(scene, spp=64, seed=1, progress=False, target_error=target, workers=2)
+    assert 1 < one.spp < 64 and one.spp == two.spp
+    np.testing.assert_array_equal(one.image, two.image)
+    with pytest.raises(ArgumentError, match="in \\(0, 1\\)"):
+        render_volumetric(scene, spp=8, progress=False, target_error=0.0)
+
+
+def test_the_checkpoint_of_another_reference_is_refused(tmp_path, monkeypatch):
+    scene = reflets.load_dict(SCENE)
+    saved = tmp_path / "ref.partial.npz"
+    monkeypatch.setattr(checkpoints, "SAVE_EVERY_S", 0.0)
+    with monkeypatch.context() as crashing:
+        _crash_after(crashing, 2)
+        with pytest.raises(KeyboardInterrupt):
+            render_volumetric(scene, spp=8, seed=2, progress=False, checkpoint=saved)
+    before = saved.read_bytes()
+    with pytest.raises(ArgumentError, match="another reference"):
+        render_volumetric(scene, spp=8, seed=3, progress=False, checkpoint=saved)  # another seed
+    (tmp_path / "junk.npz").write_text("not numpy")
+    with pytest.raises(ArgumentError, match="not a reflets checkpoint"):
+        render_volumetric(scene, spp=8, seed=2, progress=False, checkpoint=tmp_path / "junk.npz")
+    assert saved.read_bytes() == before
+
+
+def test_the_cli_keeps_an_interrupted_run_s_partial_sums(tmp_path, capsys):
+    from reflets.cli import main
+
+    scene = tmp_path / "sphere.toml"
+    scene.write_text(
+        "[camera]\nposition = [0, 0.5, 3]\nlook_at = [0, 0, 0]\nfov_y = 35\nsize = [16, 12]\n"
+        '[materials.skin]\ntype = "translucent"\npreset = "skin1"\neta = 1.0\nmm_per_unit = 25.0\n'
+        '[[mesh]]\nshape = "sphere"\nradius = 1.0\nmaterial = "skin"\n'
+        '[[light]]\ntype = "point"\nposition = [2, 3, 2]\nintensity = [20, 20, 20]\n'
+    )
+    out = tmp_path / "ref.exr"
+    partial = tmp_path / "ref.exr.partial.npz"
+    partial.write_bytes(b"someone's partial sums")
+    args = ["reference", str(scene), "-o", str(out), "--engine", "volumetric", "--spp", "2", "-q"]
+    assert main(args) == 2 and "--resume" in capsys.readouterr().err
+    assert partial.read_bytes() == b"someone's partial sums" and not out.exists()
+    partial.unlink()
+    assert main([*args, "--resume"]) == 2 and "nothing to resume" in capsys.readouterr().err
+    assert main([*args, "--target-error", "2"]) == 2 and "(0, 1)" in capsys.readouterr().err
+    assert not out.exists()
+    numpy_args = ["reference", str(scene), "-o", str(out), "--spp", "2", "-q", "--target-error", "0.1"]
+    assert main(numpy_args) == 2 and "volumetric engine" in capsys.readouterr().err
+    assert main([*args, "--target-error", "0.5"]) == 0 and out.exists() and not partial.exists()
