@@ -341,6 +341,7 @@ def cmd_ar_run(args) -> int:
 def cmd_reference(args) -> int:
     from .imageio import check_not_input, check_output_path, write_image
     from .reference import reference
+    from .reference.checkpoint import PartialSums
 
     out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".ref.exr")
     check_output_path(out, (".exr", ".npy"))
@@ -373,11 +374,14 @@ def cmd_reference(args) -> int:
         progress=not args.quiet,
         workers=args.workers,
         checkpoint=checkpoint,
+        keep_checkpoint=True,
         target_error=args.target_error,
     )
     write_image(out, result.image)
     if result.engine != "mitsuba":
         write_image(stderr_path, result.stderr)
+    if checkpoint is not None:  # the images are safe: the partial sums go
+        PartialSums(checkpoint, "").remove()
     print(
         f"wrote {out}"
         + (f" and {stderr_path}" if result.engine != "mitsuba" else "")

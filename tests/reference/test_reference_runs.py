@@ -10,7 +10,6 @@ import pytest
 
 import reflets
 from reflets.errors import ArgumentError
-from reflets.reference import checkpoint as checkpoints
 from reflets.reference import volumetric
 from reflets.reference.volumetric import render_volumetric
 
@@ -22,13 +21,14 @@ SCENE = {
 }
 
 
-def _crash_after(monkeypatch, blocks: int) -> None:
-    """Make this process's walk fail after ``blocks`` blocks (a kill half-way)."""
+def _crash_after(monkeypatch, blocks: int, error=KeyboardInterrupt) -> None:
+    """Make each process's walk fail after ``blocks`` blocks (Ctrl-C, or an error, half-way; forked workers
+    inherit it)."""
     original, calls = volumetric._VolumetricJob.sums, []
 
     def sums(self, *args):
         if len(calls) == blocks:
-            raise KeyboardInterrupt
+            raise error("stopped half-way")
         calls.append(1)
         return original(self, *args)
 
@@ -37,20 +37,38 @@ def _crash_after(monkeypatch, blocks: int) -> None:
 
 @pytest.mark.parametrize("workers", [1, 2])
 def test_a_killed_run_resumed_gives_the_uninterrupted_image(tmp_path, monkeypatch, workers):
+    """Ctrl-C after three blocks in one process (its sums written at once, not after SAVE_EVERY_S), then the run
+    resumed in one or two processes."""
     scene = reflets.load_dict(SCENE)
     whole = render_volumetric(scene, spp=8, seed=2, progress=False)
     saved = tmp_path / "ref.partial.npz"
-    monkeypatch.setattr(checkpoints, "SAVE_EVERY_S", 0.0)
     with monkeypatch.context() as crashing:
         _crash_after(crashing, 3)
         with pytest.raises(KeyboardInterrupt):
             render_volumetric(scene, spp=8, seed=2, progress=False, checkpoint=saved)
     with np.load(saved) as data:
-        assert int(data["next_block"]) == 3  # the blocks done before the kill
+        assert int(data["next_block"]) == 3  # the blocks done before the interruption
     resumed = render_volumetric(scene, spp=8, seed=2, progress=False, checkpoint=saved, workers=workers)
     np.testing.assert_array_equal(resumed.image, whole.image)
     np.testing.assert_array_equal(resumed.stderr, whole.stderr)
     assert resumed.spp == 8 and not saved.exists()  # the finished run's partial sums are gone
+
+
+def test_an_error_in_a_worker_process_stops_the_run_and_keeps_its_sums(tmp_path, monkeypatch):
+    """Two processes, each failing on its third block: the run stops at once (the other blocks dropped), the
+    blocks added in order are written, and the run resumed gives the uninterrupted image."""
+    scene = reflets.load_dict(SCENE)
+    whole = render_volumetric(scene, spp=16, seed=2, progress=False)
+    saved = tmp_path / "ref.partial.npz"
+    with monkeypatch.context() as crashing:
+        _crash_after(crashing, 2, error=RuntimeError)
+        with pytest.raises(RuntimeError, match="half-way"):
+            render_volumetric(scene, spp=16, seed=2, progress=False, checkpoint=saved, workers=2)
+    with np.load(saved) as data:
+        assert 0 < int(data["next_block"]) < 16
+    resumed = render_volumetric(scene, spp=16, seed=2, progress=False, checkpoint=saved, workers=2)
+    np.testing.assert_array_equal(resumed.image, whole.image)
+    np.testing.assert_array_equal(resumed.stderr, whole.stderr)
 
 
 def test_a_target_error_stops_at_the_same_block_in_any_number_of_processes():
@@ -70,7 +88,6 @@ def test_a_target_error_stops_at_the_same_block_in_any_number_of_processes():
 def test_the_checkpoint_of_another_reference_is_refused(tmp_path, monkeypatch):
     scene = reflets.load_dict(SCENE)
     saved = tmp_path / "ref.partial.npz"
-    monkeypatch.setattr(checkpoints, "SAVE_EVERY_S", 0.0)
     with monkeypatch.context() as crashing:
         _crash_after(crashing, 2)
         with pytest.raises(KeyboardInterrupt):
@@ -78,9 +95,10 @@ def test_the_checkpoint_of_another_reference_is_refused(tmp_path, monkeypatch):
     before = saved.read_bytes()
     with pytest.raises(ArgumentError, match="another reference"):
         render_volumetric(scene, spp=8, seed=3, progress=False, checkpoint=saved)  # another seed
-    (tmp_path / "junk.npz").write_text("not numpy")
-    with pytest.raises(ArgumentError, match="not a reflets checkpoint"):
-        render_volumetric(scene, spp=8, seed=2, progress=False, checkpoint=tmp_path / "junk.npz")
+    for junk in ("not numpy", ""):  # a file of something else; an empty one (a power cut mid-write)
+        (tmp_path / "junk.npz").write_text(junk)
+        with pytest.raises(ArgumentError, match="not a reflets checkpoint"):
+            render_volumetric(scene, spp=8, seed=2, progress=False, checkpoint=tmp_path / "junk.npz")
     assert saved.read_bytes() == before
 
 

@@ -33,6 +33,7 @@ def reference(
     adaptive_error: float | None = None,
     adaptive_spp: int = 16384,
     checkpoint: str | Path | None = None,
+    keep_checkpoint: bool = False,
     target_error: float | None = None,
 ) -> ReferenceResult:
     """Render a ground-truth image of ``scene`` (direct lighting only, like every reflets technique; the
@@ -47,8 +48,9 @@ def reference(
         ``translucent`` technique's single + multiple scattering, reflets.reference.volumetric; pixel centres, with
         shadows)
     workers : processes sharing the samples (volumetric engine: the same image for any number)
-    checkpoint, target_error : (volumetric engine) a file of the partial sums to go on from after a kill, and the
-        mean relative standard error to stop at (reflets.reference.volumetric.render_volumetric)
+    checkpoint, keep_checkpoint, target_error : (volumetric engine) a file of the partial sums to go on from after
+        a kill (kept at the end with ``keep_checkpoint``: the caller removes it once it has written the images),
+        and the mean relative standard error to stop at (reflets.reference.volumetric.render_volumetric)
     visibility : shadows on (ray-cast occlusion) or off (the area-light document's unoccluded setting)
     pixel : "center" samples the pixel centre like the GPU renderer; "box" averages over the pixel
     heuristic : MIS weights, "power" (β = 2) or "balance"
@@ -98,7 +100,8 @@ def reference(
             )
         start = time.perf_counter()
         result = render_volumetric(scene, spp=spp, seed=seed, size=size, progress=progress, workers=workers,
-                                   checkpoint=checkpoint, target_error=target_error)  # fmt: skip
+                                   checkpoint=checkpoint, keep_checkpoint=keep_checkpoint,
+                                   target_error=target_error)  # fmt: skip
         return ReferenceResult(result.image, result.stderr, result.spp, time.perf_counter() - start,
                                engine="volumetric")  # fmt: skip
     raise ArgumentError(f"unknown engine '{engine}'; allowed: {', '.join(ENGINES)}", field="engine")

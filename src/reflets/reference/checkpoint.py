@@ -9,27 +9,26 @@ the engine's parameters, the blocks); a file of another reference is refused, ne
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 import time
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import ArgumentError
+from ..errors import ARRAY_READ_ERRORS, ArgumentError
 
-#: seconds between two writes of the partial sums (and one after the last block before the end)
+#: seconds between two writes of the partial sums as blocks complete (a kill, a crash or an error writes them at
+#: once, and a finished run's sums are written before the caller writes its images)
 SAVE_EVERY_S = 10.0
 
 
 def reference_key(scene, **params) -> str:
-    """A digest of what a reference's sums depend on: the scene as validated, its input files (size and time of
-    change), and the engine's parameters."""
-    files = sorted((str(path), path.stat().st_size, path.stat().st_mtime_ns)
-                   for path in scene.input_files() if path.is_file())  # fmt: skip
-    text = json.dumps([scene.model_dump(mode="json"), files, params], sort_keys=True, default=str)
-    return hashlib.sha256(text.encode()).hexdigest()
+    """A digest of what a reference's sums depend on, bit for bit: the scene and its files' contents
+    (``store.fingerprint``: the reference algorithm's version included), the engine's parameters (its sampling's
+    version among them) and NumPy's version (its random streams and vectorised functions)."""
+    from .store import fingerprint
+
+    return fingerprint(scene, numpy=np.__version__, **params)[0]
 
 
 class PartialSums:
@@ -49,7 +48,7 @@ class PartialSums:
             with np.load(self.path, allow_pickle=False) as data:
                 key, next_block = str(data["key"]), int(data["next_block"])
                 total, total2 = np.array(data["total"]), np.array(data["total2"])
-        except (OSError, ValueError, KeyError) as exc:
+        except (*ARRAY_READ_ERRORS, KeyError) as exc:
             raise ArgumentError(f"not a reflets checkpoint ({exc})", file=self.path, field="--resume") from None
         if key != self.key:
             raise ArgumentError(
@@ -63,13 +62,19 @@ class PartialSums:
         at most every SAVE_EVERY_S seconds unless ``force``."""
         if not force and time.monotonic() - self._saved_at < SAVE_EVERY_S:
             return
-        partial = self.path.with_name(self.path.name + ".writing")
-        with open(partial, "wb") as stream:
+        with open(self._writing, "wb") as stream:
             np.savez(stream, key=self.key, next_block=next_block, total=np.asarray(total, np.float64),
                      total2=np.asarray(total2, np.float64))  # fmt: skip
-        os.replace(partial, self.path)
+            stream.flush()
+            os.fsync(stream.fileno())  # on disk before it replaces the previous one
+        os.replace(self._writing, self.path)
         self._saved_at = time.monotonic()
 
     def remove(self) -> None:
-        """The reference is complete: its partial sums go."""
+        """The reference is complete and its images written: its partial sums go."""
         self.path.unlink(missing_ok=True)
+        self._writing.unlink(missing_ok=True)
+
+    @property
+    def _writing(self) -> Path:
+        return self.path.with_name(self.path.name + ".writing")

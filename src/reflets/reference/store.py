@@ -18,7 +18,8 @@ import numpy as np
 
 from ..cache import content_key, file_digest
 
-#: bump when the volumetric reference's algorithm changes what it converges to or how it samples
+#: bump when the volumetric reference's algorithm changes what it converges to (a stored reference stays a valid
+#: estimate when only its random streams change — a checkpoint's key adds those: volumetric.SAMPLING_VERSION)
 REFERENCE_VERSION = "volumetric-1"
 
 

@@ -20,6 +20,7 @@ point is found by Newton's method, and its flux density there from the beam's cr
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -302,6 +303,7 @@ def render_volumetric(
     orders: int | None = None,
     workers: int = 1,
     checkpoint: str | Path | None = None,
+    keep_checkpoint: bool = False,
     target_error: float | None = None,
 ) -> VolumetricImage:
     """Volumetric path tracing of a homogeneous translucent medium inside the scene's closed meshes, lit by one
@@ -326,28 +328,33 @@ def render_volumetric(
     ``workers > 1`` shares the blocks between that many processes (a reference at the document's 1024×768 takes
     an hour of one core) and gives the same image and standard error, bit for bit, as one.
 
-    ``checkpoint``: an ``.npz`` file the partial sums are written to as the blocks complete
-    (:mod:`reflets.reference.checkpoint`); when it exists, the run goes on from it (a kill or a crash loses at most
-    the blocks of the last seconds) and ends in the uninterrupted run's image; removed at the end.
+    ``checkpoint``: an ``.npz`` file the partial sums are written to as the blocks complete — every
+    ``checkpoint.SAVE_EVERY_S`` seconds, and at once on Ctrl-C or an error (a kill loses the blocks since the last
+    write, and those running) (:mod:`reflets.reference.checkpoint`); when it exists, the run goes on from it and
+    ends in the uninterrupted run's image. It holds the finished sums at the end: removed here unless
+    ``keep_checkpoint`` (the CLI removes it once the images are written).
     ``target_error``: stop after the first block at which the mean relative standard error of the object's pixels
     (luminance) is at most this (``result.spp``: the samples taken) — the same block for any number of workers."""
     if size is not None:
         scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"size": tuple(size)})})
     _check_memory(scene, workers, refract)
-    if target_error is not None and not (isinstance(target_error, int | float) and 0 < target_error < 1):
+    if target_error is not None and (isinstance(target_error, bool) or not isinstance(target_error, numbers.Real)
+                                     or not 0 < target_error < 1):  # fmt: skip
         raise ArgumentError(f"must be a number in (0, 1), got {target_error!r}", field="target_error")
     job = _VolumetricJob(scene, refract, orders)
     blocks = sample_blocks(spp, len(job.pix))
     seeds = np.random.SeedSequence(seed).spawn(len(blocks))
     partial = None
     if checkpoint is not None:
-        key = reference_key(scene, engine="volumetric", spp=spp, seed=seed, refract=refract, orders=orders,
-                            blocks=blocks)  # fmt: skip
+        key = reference_key(scene, engine="volumetric", sampling=SAMPLING_VERSION, spp=spp, seed=seed,
+                            refract=refract, orders=orders, blocks=blocks)  # fmt: skip
         partial = PartialSums(checkpoint, key)
     # an albedo map: the light leaving the medium towards the camera × its texel where it leaves (the camera hit)
     tint = job.material.tint(job.geometry.uv_sets(job.hits.prim[job.pix], job.hits.u[job.pix], job.hits.v[job.pix]))
     runner = _BlockRunner(job, blocks, seeds, tint, partial, target_error)
     runner.run(scene, refract, orders, workers, progress)
+    if partial is not None and not keep_checkpoint:
+        partial.remove()
     total, total2, spp = runner.total, runner.total2, runner.samples
     mean = total / spp * tint
     var = np.maximum(total2 / spp - (total / spp) ** 2, 0.0) / max(spp - 1, 1) * tint**2
@@ -470,23 +477,30 @@ def _init_worker(scene, refract, orders) -> None:
     _WORKER_JOB = _VolumetricJob(scene, refract, orders)
 
 
-def _worker_sums(spp: int, seed) -> tuple[int, np.ndarray, np.ndarray]:
+def _worker_sums(task) -> tuple[int, np.ndarray, np.ndarray]:
+    """One block's sums in a worker process: (block index, Σ, Σ²)."""
+    index, spp, seed = task
     total, total2 = _WORKER_JOB.sums(spp, np.random.default_rng(seed), lambda k: None)
-    return spp, total, total2
+    return index, total, total2
+
+
+#: how the samples are drawn (blocks, their seeds): a checkpoint of another version is not resumed (bump on a change)
+SAMPLING_VERSION = 2
 
 
 def sample_blocks(spp: int, pixels: int) -> list[int]:
     """How ``spp`` samples are split into tasks: at most what one batch holds (``_samples_per_batch``), and at
-    least eight tasks when there are samples enough — from ``spp`` and the pixels alone, so that the image does
-    not depend on how many processes share them."""
-    block = max(1, min(_samples_per_batch(pixels), -(-spp // 8)))
+    least eight tasks when there are eight samples or more — from ``spp`` and the pixels alone, so that the image
+    does not depend on how many processes share them."""
+    block = max(1, min(_samples_per_batch(pixels), spp // 8))
     return [min(block, spp - start) for start in range(0, spp, block)]
 
 
 class _BlockRunner:
     """Runs a reference's blocks of samples — in this process or in ``workers`` others — and adds their sums in
     block order, whatever order they finish in (so that the floating-point sums equal one process's, bit for bit);
-    goes on from a checkpoint, writes it as it goes, stops at a target error, shows the samples done, the time left
+    goes on from a checkpoint and writes it as it goes (at once on an interruption or an error, and at the end: the
+    caller removes it once the images are safe), stops at a target error, and shows the samples done, the time left
     and the current error."""
 
     def __init__(self, job, blocks: list[int], seeds, tint, partial: PartialSums | None, target: float | None):
@@ -501,14 +515,15 @@ class _BlockRunner:
         return sum(self.blocks[: self.next_block])
 
     def error(self) -> float:
-        """The mean relative standard error (luminance) of the object's pixels after the blocks added so far."""
+        """The mean relative standard error of the object pixels' luminance after the blocks added so far (the
+        channels are independent walks: their variances add with the squared weights)."""
         n = self.samples
         if n < 2 or np.ndim(self.total) == 0:
             return float("inf")
         mean = self.total / n * self.tint
         var = np.maximum(self.total2 / n - (self.total / n) ** 2, 0.0) / (n - 1) * self.tint**2
         weights = np.array([0.2126, 0.7152, 0.0722])
-        lum, err = mean @ weights, np.sqrt(var) @ weights
+        lum, err = mean @ weights, np.sqrt(var @ weights**2)
         seen = lum > 0
         return float(np.mean(err[seen] / lum[seen])) if seen.any() else 0.0
 
@@ -517,53 +532,61 @@ class _BlockRunner:
         self.total, self.total2 = self.total + t, self.total2 + t2
         self.next_block += 1
         done = self.next_block == len(self.blocks) or (self.target is not None and self.error() <= self.target)
-        if self.partial is not None and not done:
-            self.partial.save(self.next_block, self.total, self.total2)
+        self._save(force=done)
         return done
+
+    def _save(self, force: bool) -> None:
+        if self.partial is not None and self.next_block > 0:
+            self.partial.save(self.next_block, self.total, self.total2, force=force)
 
     def run(self, scene, refract, orders, workers: int, progress: bool) -> None:
         todo = list(range(self.next_block, len(self.blocks)))
+        if not todo or (self.target is not None and self.error() <= self.target):
+            return  # the checkpoint of a finished run
         label = self.job.label + (f" ({workers} processes)" if workers > 1 else "")
-        with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
-                      TimeRemainingColumn(), TextColumn("{task.fields[error]}"), disable=not progress,
-                      transient=True) as bar:  # fmt: skip
+        columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
+                   TimeRemainingColumn(), TextColumn("{task.fields[error]}"))  # fmt: skip
+        # the time left from the whole run's pace (blocks of a large image take minutes: rich's default 30 s window
+        # would hold one)
+        with Progress(*columns, disable=not progress, transient=True, speed_estimate_period=24 * 3600) as bar:
             task = bar.add_task(label, total=sum(self.blocks), completed=self.samples, error="")
 
             def added(t, t2) -> bool:
                 done = self._add(t, t2)
-                bar.update(task, completed=self.samples, error=f"σ/μ {self.error():.3g}")
+                bar.update(task, error=f"σ/μ {self.error():.3g}")
                 return done
 
-            if not todo or (self.target is not None and self.error() <= self.target):
-                pass  # a checkpoint of a finished run
-            elif workers > 1:
-                self._in_processes(todo, scene, refract, orders, workers, added)
-            else:
-                for index in todo:
-                    t, t2 = self.job.sums(self.blocks[index], np.random.default_rng(self.seeds[index]), lambda k: None)
-                    if added(t, t2):
-                        break
-        if self.partial is not None:
-            self.partial.remove()
+            try:
+                if workers > 1:
+                    self._in_processes(todo, scene, refract, orders, workers, added, lambda k: bar.advance(task, k))
+                else:
+                    for index in todo:
+                        rng = np.random.default_rng(self.seeds[index])
+                        t, t2 = self.job.sums(self.blocks[index], rng, lambda k: bar.advance(task, k))
+                        if added(t, t2):
+                            break
+            except BaseException:  # a kill, Ctrl-C or an error: what was added is kept
+                self._save(force=True)
+                raise
 
-    def _in_processes(self, todo: list[int], scene, refract, orders, workers: int, added) -> None:
+    def _in_processes(self, todo: list[int], scene, refract, orders, workers: int, added, advance) -> None:
         import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor, as_completed
 
-        done: dict[int, tuple] = {}
+        done: dict[int, tuple] = {}  # blocks finished ahead of the next one to add
         # fork where there is one: scripts and notebooks without a __main__ guard work (the workers touch no GL)
         context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-        with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker,
-                                 initargs=(scene, refract, orders)) as pool:  # fmt: skip
-            futures = {pool.submit(_worker_sums, self.blocks[i], self.seeds[i]): i for i in todo}
-            for future in as_completed(futures):
-                _, t, t2 = future.result()
-                done[futures[future]] = (t, t2)
+        pool = context.Pool(workers, initializer=_init_worker, initargs=(scene, refract, orders))
+        try:
+            tasks = [(index, self.blocks[index], self.seeds[index]) for index in todo]
+            for index, t, t2 in pool.imap_unordered(_worker_sums, tasks):
+                done[index] = (t, t2)
+                advance(self.blocks[index])
                 while self.next_block in done:
                     if added(*done.pop(self.next_block)):
-                        for other in futures:
-                            other.cancel()
                         return
+        finally:
+            pool.terminate()  # an early stop, an error or Ctrl-C: the blocks still running are dropped at once
+            pool.join()
 
 
 # ------------------------------------------------------------------------------ refracting boundary (η ≠ 1)
