@@ -116,7 +116,7 @@ def load(path: Path, digest: str):
 
 def read(path: Path):
     """The stored image and its compute time, whatever it was made for (``load`` checks the fingerprint first)."""
-    from .volumetric import VolumetricImage
+    from .results import VolumetricImage
 
     with np.load(path) as data:
         shape = tuple(int(v) for v in data["shape"])

@@ -38,6 +38,7 @@ from ..translucency.optics import (
     sample_henyey_greenstein,
 )
 from .checkpoint import PartialSums, reference_key
+from .results import VolumetricImage
 
 
 @dataclass
@@ -148,16 +149,6 @@ def slab_reflectance(
 
 
 # ---------------------------------------------------------------------------------------------- meshes
-
-
-@dataclass
-class VolumetricImage:
-    """Mean radiance per pixel and its standard error (float32 (H, W, 3)), with the object mask."""
-
-    image: np.ndarray
-    stderr: np.ndarray
-    mask: np.ndarray
-    spp: int
 
 
 def _check_volumetric_scene(scene):
