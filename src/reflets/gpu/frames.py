@@ -133,7 +133,7 @@ def fullscreen_pass(ctx, spec: ProgramSpec, uniforms: dict) -> None:
 
 def copy_image(ctx, framebuffer, size: tuple[int, int], colour, depth) -> None:
     """Colour and depth textures into ``framebuffer`` (the same size), drawn on the GPU: a blit of depth is a
-    CPU copy on llvmpipe, which first waits for all that was drawn (2.3 ms of a 64 × 48 showcase frame). The
+    CPU copy on llvmpipe, which first waits for all that was drawn. The
     depth texture is read as numbers (its comparison turned off)."""
     framebuffer.use()
     ctx.viewport = (0, 0, *size)
