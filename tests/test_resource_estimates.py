@@ -197,7 +197,7 @@ def test_volumetric_reference_size_is_refused(monkeypatch, eta, per_pixel):
     monkeypatch.setenv(ENV_VAR, "150MB")
     scene = {**TRANSLUCENT_SPHERE, "materials": {"skin": {**TRANSLUCENT_SPHERE["materials"]["skin"], "eta": eta}}}
     with pytest.raises(ResourceError, match=rf"^size: 512x384 .*volumetric reference: 196,608 pixels × {per_pixel} B"):
-        reference(scene, engine="volumetric", size=(512, 384), spp=1, progress=False)
+        reference(scene, engine="volumetric", size=(512, 384), spp=1, progress=False, workers=1)
 
 
 def test_volumetric_reference_counts_its_worker_processes(monkeypatch):

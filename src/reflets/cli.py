@@ -682,8 +682,8 @@ def build_parser() -> argparse.ArgumentParser:
         default="numpy",
         help="numpy (direct lighting, default), mitsuba, or volumetric (translucent media, all scattering orders)",
     )
-    p.add_argument("--workers", type=int, default=1, help="processes sharing the samples (volumetric engine; the "
-                   "same image for any number)")  # fmt: skip
+    p.add_argument("--workers", type=int, default=None, help="processes sharing the samples (volumetric engine; the "
+                   "same image for any number; default: every core)")  # fmt: skip
     p.add_argument("--resume", action="store_true", help="volumetric engine: go on from OUTPUT.partial.npz, the "
                    "partial sums a killed run left (the image of an uninterrupted run)")  # fmt: skip
     p.add_argument("--target-error", type=float, default=None, help="volumetric engine: stop when the mean relative "

@@ -125,3 +125,22 @@ def test_the_cli_keeps_an_interrupted_run_s_partial_sums(tmp_path, capsys):
     numpy_args = ["reference", str(scene), "-o", str(out), "--spp", "2", "-q", "--target-error", "0.1"]
     assert main(numpy_args) == 2 and "volumetric engine" in capsys.readouterr().err
     assert main([*args, "--target-error", "0.5"]) == 0 and out.exists() and not partial.exists()
+
+
+def test_every_core_by_default(monkeypatch):
+    """``reflets.reference(engine="volumetric")`` without ``workers`` shares the samples among every core."""
+    import os
+
+    seen = {}
+
+    def fake(scene, **kwargs):
+        seen.update(kwargs)
+        raise StopIteration
+
+    monkeypatch.setattr(volumetric, "render_volumetric", fake)
+    monkeypatch.setattr(os, "cpu_count", lambda: 7)
+    with pytest.raises(StopIteration):
+        reflets.reference(reflets.load_dict(SCENE), engine="volumetric", spp=2, progress=False)
+    assert seen["workers"] == 7
+    with pytest.raises(ArgumentError, match="at least 1"):
+        reflets.reference(reflets.load_dict(SCENE), engine="volumetric", workers=0)

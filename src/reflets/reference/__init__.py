@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 from typing import Literal
@@ -29,7 +30,7 @@ def reference(
     pixel: Literal["center", "box"] = "center",
     heuristic: Literal["power", "balance"] = "power",
     progress: bool = True,
-    workers: int = 1,
+    workers: int | None = None,
     adaptive_error: float | None = None,
     adaptive_spp: int = 16384,
     checkpoint: str | Path | None = None,
@@ -47,7 +48,8 @@ def reference(
         translucent medium inside its smooth boundary, one point, directional, quad, polygon or environment light: the
         ``translucent`` technique's single + multiple scattering, reflets.reference.volumetric; pixel centres, with
         shadows)
-    workers : processes sharing the samples (volumetric engine: the same image for any number)
+    workers : processes sharing the samples (volumetric engine: the same image for any number; default every core
+        of this machine, ``os.cpu_count()``)
     checkpoint, keep_checkpoint, target_error : (volumetric engine) a file of the partial sums to go on from after
         a kill (kept at the end with ``keep_checkpoint``: the caller removes it once it has written the images),
         and the mean relative standard error to stop at (reflets.reference.volumetric.render_volumetric)
@@ -62,8 +64,10 @@ def reference(
 
     scene = as_scene(scene)
     size = check_size(size)
-    if workers < 1:
-        raise ArgumentError(f"workers must be at least 1 (got {workers})", field="workers")
+    if workers is None:
+        workers = os.cpu_count() or 1
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ArgumentError(f"workers must be at least 1 (got {workers!r})", field="workers")
     if engine != "volumetric" and (checkpoint is not None or target_error is not None):
         raise ArgumentError("checkpoints and a target error are the volumetric engine's (--engine volumetric)",
                             field="checkpoint" if checkpoint is not None else "target_error")  # fmt: skip
