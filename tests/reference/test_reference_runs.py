@@ -121,6 +121,7 @@ def test_the_cli_keeps_an_interrupted_run_s_partial_sums(tmp_path, capsys):
     partial.unlink()
     assert main([*args, "--resume"]) == 2 and "nothing to resume" in capsys.readouterr().err
     assert main([*args, "--target-error", "2"]) == 2 and "(0, 1)" in capsys.readouterr().err
+    assert main([*args[:-3], "--spp", "1000000000", "-q"]) == 2 and "1..65536" in capsys.readouterr().err
     assert not out.exists()
     numpy_args = ["reference", str(scene), "-o", str(out), "--spp", "2", "-q", "--target-error", "0.1"]
     assert main(numpy_args) == 2 and "volumetric engine" in capsys.readouterr().err

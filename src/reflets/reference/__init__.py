@@ -60,10 +60,11 @@ def reference(
         re-rendered alone with 4× the samples, round after round, up to ``adaptive_spp`` (unbiased: see
         reflets.reference.montecarlo); ``result.pixel_spp`` tells how many samples each pixel got
     """
-    from ..arguments import as_scene, check_size
+    from ..arguments import as_scene, check_size, check_spp
 
     scene = as_scene(scene)
     size = check_size(size)
+    check_spp(spp)  # a count the user gives is bounded (as render's), before any work
     if workers is None:
         workers = os.cpu_count() or 1
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
