@@ -160,7 +160,8 @@ def test_camera_independent_passes_are_drawn_once(ctx, monkeypatch):
 def test_a_showcase_frame_submits_in_a_few_milliseconds():
     """The issue's bound: the showcase's cpu_ms (its passes submitted: Python and driver work, the waits of
     llvmpipe for a texture a pass reads back included) at 64 × 48 is at most 5 ms — frames after the first from
-    one view, whose static parts are kept (measured: about 0.5 ms; a camera move solves and draws again). In a
+    one view, whose static parts are kept (`reflets bench gpu` prints it: 0.66 ms in benchmarks/results/gpu.md; a
+    camera move solves and draws again). In a
     process of its own: where llvmpipe waits depends on what the process drew before (docs/performance.md)."""
     code = (
         "import statistics, reflets\n"

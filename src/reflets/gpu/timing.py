@@ -11,7 +11,7 @@ A frame is timed two ways, neither of which waits for the GPU:
   read :data:`LAG` frames later, when the GPU has long finished it (moderngl has no "result available?" call: the
   lag is what keeps the read from waiting).
 
-On Mesa's llvmpipe a time query returns nonsense (measured: 2³² − 1 ns), so there are no ``gpu_ms`` there.
+On Mesa's llvmpipe a time query returns nonsense (a constant, whatever was drawn), so there are no ``gpu_ms`` there.
 Benchmarks that want a whole frame's time on llvmpipe use :meth:`FrameTimer.measuring`: a ``finish()`` before
 and after each frame (``wall_ms``) — never in an interactive loop.
 """

@@ -3,8 +3,8 @@ kill or a crash — and the run that goes on ends in the image an uninterrupted 
 
 A reference split into blocks (each with its own random stream, their sums added in block order) is fully
 described by the blocks done so far: ``next_block`` and the per-pixel Σ and Σ² of blocks ``0 … next_block − 1``.
-The file also holds a key of everything the sums depend on (the scene as validated, its files' sizes and times,
-the engine's parameters, the blocks); a file of another reference is refused, never mixed in.
+The file also holds a key of everything the sums depend on (the scene as validated, its files' contents, the
+engine's parameters, the blocks); a file of another reference is refused, never mixed in.
 """
 
 from __future__ import annotations

@@ -29,6 +29,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
 from ..brdf.base import orthonormal_basis
 from ..errors import ArgumentError
+from ..scene.lightmask import LUMINANCE
 from ..translucency.medium import Medium
 from ..translucency.optics import (
     fresnel_reflectance,
@@ -346,9 +347,8 @@ def render_volumetric(
     runner.run(scene, refract, orders, workers, progress)
     if partial is not None and not keep_checkpoint:
         partial.remove()
-    total, total2, spp = runner.total, runner.total2, runner.samples
-    mean = total / spp * tint
-    var = np.maximum(total2 / spp - (total / spp) ** 2, 0.0) / max(spp - 1, 1) * tint**2
+    mean, var = mean_and_variance(runner.total, runner.total2, runner.samples, tint)
+    spp = runner.samples
     h, w = job.shape
     image = np.zeros((h * w, 3), np.float32)
     err = np.zeros((h * w, 3), np.float32)
@@ -475,6 +475,14 @@ def _worker_sums(task) -> tuple[int, np.ndarray, np.ndarray]:
     return index, total, total2
 
 
+def mean_and_variance(total, total2, n: int, tint) -> tuple[np.ndarray, np.ndarray]:
+    """Per-pixel mean of ``n`` samples from their Σ and Σ², and the variance of that mean, both tinted by the
+    albedo map where the light leaves."""
+    mean = total / n
+    var = np.maximum(total2 / n - mean**2, 0.0) / max(n - 1, 1)
+    return mean * tint, var * tint**2
+
+
 #: how the samples are drawn (blocks, their seeds): a checkpoint of another version is not resumed (bump on a change)
 SAMPLING_VERSION = 2
 
@@ -511,10 +519,8 @@ class _BlockRunner:
         n = self.samples
         if n < 2 or np.ndim(self.total) == 0:
             return float("inf")
-        mean = self.total / n * self.tint
-        var = np.maximum(self.total2 / n - (self.total / n) ** 2, 0.0) / (n - 1) * self.tint**2
-        weights = np.array([0.2126, 0.7152, 0.0722])
-        lum, err = mean @ weights, np.sqrt(var @ weights**2)
+        mean, var = mean_and_variance(self.total, self.total2, n, self.tint)
+        lum, err = mean @ LUMINANCE, np.sqrt(var @ LUMINANCE**2)
         seen = lum > 0
         return float(np.mean(err[seen] / lum[seen])) if seen.any() else 0.0
 

@@ -331,6 +331,8 @@ class Fermat(Forward):
             self._reflection_draws.append(draws)
             self._solve_programs.append(solve_program)
             self._solves.append(solves)
+        # per reflector: does it reflect a scratched material (new samples each frame)?
+        self._scratched = [any(scratched for *_, scratched in draws) for draws in self._reflection_draws]
         self._solved: list[tuple | None] = [None] * len(self._reflectors)  # the eye each one's points are for
         self._composites = []
         for r, (_, size) in zip(self._reflectors, bounds, strict=True):
@@ -510,7 +512,10 @@ class Fermat(Forward):
     @property
     def frame_dependent(self) -> bool:
         """A reflected scratched material samples its lobes anew each frame."""
-        return any(scratched for draws in getattr(self, "_reflection_draws", ()) for *_, scratched in draws)
+        return any(getattr(self, "_scratched", ()))
+
+    def _eye(self) -> tuple[float, float, float]:
+        return tuple(float(c) for c in self.scene.camera.position)
 
     def _reflects(self) -> bool:
         """Does this pass draw the reflections (the extras pass of a radiance frame)?"""
@@ -538,7 +543,7 @@ class Fermat(Forward):
             for vao, reflector_id in self._gbuffer_draws:
                 set_uniforms(program, {"u_view_proj": vp_bytes, "u_reflector_id": reflector_id})
                 vao.render()
-        eye = tuple(float(c) for c in self.scene.camera.position)
+        eye = self._eye()
         for k in range(len(self._reflectors)):
             self._solve(k, eye)
             fbo = images.reflections[k][0]
@@ -557,7 +562,7 @@ class Fermat(Forward):
         images = self._images(target.size)
         for k in range(len(self._reflectors)):
             fbo, reflection = images.reflections[k]
-            if images.working is not None and any(scratched for *_, scratched in self._reflection_draws[k]):
+            if images.working is not None and self._scratched[k]:
                 copy_image(ctx, images.working[0], target.size, reflection, fbo.depth_attachment)
                 fbo, reflection = images.working
                 fbo.use()
@@ -577,7 +582,7 @@ class Fermat(Forward):
         common = {
             "r_grid": GRID_UNIT,
             "u_view_proj": vp_bytes,
-            "u_eye": tuple(float(c) for c in self.scene.camera.position),
+            "u_eye": self._eye(),
             "u_depth_range": self._depth_range,
             "u_gbuffer_position": GBUFFER_UNITS[0],
             "u_gbuffer_normal": GBUFFER_UNITS[1],
@@ -614,7 +619,7 @@ class Fermat(Forward):
             "u_reflection": GBUFFER_UNITS[2],
             "u_gbuffer_uvs": GBUFFER_UNITS[3],
             "u_reflector_id": float(k + 1),
-            "u_eye": tuple(float(c) for c in self.scene.camera.position),
+            "u_eye": self._eye(),
         }
         color = self.scene.background_color()
         if color is None:

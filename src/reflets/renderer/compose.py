@@ -220,6 +220,15 @@ class Auto(Technique):
         self.final = self.passes[-1][1]  # full scene: its clip planes and camera serve every pass
         self.pass_ms: dict[int, float] = {}
         self._late = self._late_passes()
+        # the frame's plan, fixed by the passes: does a pass change from frame to frame, and in which order the
+        # changing parts are drawn (first those that read back an image they draw: a reflection — on llvmpipe the
+        # read waits for what was drawn before it, so not for the others' new samples), then the late passes
+        self._changes = any(t.frame_dependent for _, t in self.passes)
+        self._changing_order = sorted((k for k in range(len(self.passes)) if k not in self._late),
+                                      key=lambda k: not self.passes[k][1].reads_own_images)  # fmt: skip
+        self._late_order = sorted(self._late)
+        color = scene.background_color()
+        self._clear = (*(color or (0.0, 0.0, 0.0)), 1.0)
         self._static_frame = TargetCache()  # the static parts of the frame, kept for the frames after the first
         self._static_view: tuple | None = None
 
@@ -275,7 +284,7 @@ class Auto(Technique):
     def screen_bytes_per_sample(self) -> int:
         """The passes' screen images, and the kept static frame (colour + depth, 20 B) when some pass changes from
         frame to frame."""
-        kept = 20 if any(t.frame_dependent for _, t in self.passes) else 0
+        kept = 20 if self._changes else 0
         return sum(t.screen_bytes_per_sample() for _, t in self.passes) + kept
 
     def _timed_draw(self, target, view_proj, vp_bytes, frame: int, seed: int) -> None:
@@ -284,9 +293,8 @@ class Auto(Technique):
         the first from the same view restores them and draws the changing parts alone."""
         args = (target, view_proj, vp_bytes, frame, seed)
         self.pass_ms = {}
-        color = self.scene.background_color()
-        if not any(technique.frame_dependent for _, technique in self.passes):
-            target.use(clear=(*(color or (0.0, 0.0, 0.0)), 1.0))
+        if not self._changes:
+            target.use(clear=self._clear)
             for k, (_, technique) in enumerate(self.passes):
                 self._timed(k, technique._draw, args)
             return
@@ -296,19 +304,15 @@ class Auto(Technique):
             with self.timer.timed_pass("static parts kept"):
                 copy_image(self.ctx, target.fbo, target.size, kept.color, kept.depth)
         else:
-            target.use(clear=(*(color or (0.0, 0.0, 0.0)), 1.0))
+            target.use(clear=self._clear)
             for k, (_, technique) in enumerate(self.passes):
                 if k not in self._late:
                     self._timed(k, technique._draw_static, args)
             copy_image(self.ctx, kept.fbo, target.size, target.color, target.depth)
             self._static_view = view
-        # the changing parts: first those that read back an image they draw (a reflection: on llvmpipe the read
-        # waits for what was drawn before it, so not for the others' new samples), then the late passes
-        changing = sorted((k for k in range(len(self.passes)) if k not in self._late),
-                          key=lambda k: not self.passes[k][1].reads_own_images)  # fmt: skip
-        for k in changing:
+        for k in self._changing_order:
             self._timed(k, self.passes[k][1]._draw_dynamic, args)
-        for k in sorted(self._late):
+        for k in self._late_order:
             self._timed(k, self.passes[k][1]._draw, args)
 
     def _timed(self, k: int, draw, args: tuple) -> None:
@@ -336,8 +340,7 @@ class Auto(Technique):
         if getattr(self, "prepared", None) is not None:
             self.prepared.release()
         self.prepared = None
-        self._targets.release()
-        self._frame_sum.release()
+        super().release()  # the frame target and the frame sum
         if hasattr(self, "_static_frame"):
             self._static_frame.release()
             self._static_view = None

@@ -605,8 +605,7 @@ class Forward(Technique):
         if getattr(self, "_owns_prepared", False):
             self.prepared.release()
         self._owns_prepared = False
-        self._targets.release()
-        self._frame_sum.release()
+        super().release()  # the frame target and the frame sum
         self._behind.release()
 
 

@@ -320,9 +320,7 @@ class ShadowMaps:
         camera's near plane outside it (geometry.self_shadowing: a point facing a light it sees from outside a
         convex hull is not hidden by it). An orthographic camera's near plane may cut anything: convex meshes
         count as open then."""
-        if self._cull is None:
-            return [(True, True)] * len(self.scene.mesh)
-        boxes, shadowing, tests = self._cull
+        boxes, shadowing, tests = self._cull  # (only asked where culling is on)
         eye = np.asarray(camera.position, np.float64)
         if camera.orthographic:
             reach = np.inf
