@@ -339,61 +339,50 @@ def cmd_ar_run(args) -> int:
 
 
 def cmd_reference(args) -> int:
-    from .imageio import check_not_input, check_output_path, write_image
     from .reference import reference
-    from .reference.checkpoint import PartialSums
+    from .reference.batch import make, plan
+    from .reference.parallel import places, using
+    from .scene import load_scene
 
-    out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".ref.exr")
-    check_output_path(out, (".exr", ".npy"))
-    stderr_path = out.with_name(out.stem + ".stderr" + out.suffix)
     size = _size(args.size) if args.size else None
-    scene = _scene_argument(args)
-    inputs = scene.input_files() | {Path(args.scene)}
-    for path in (out, stderr_path):
-        check_not_input(path, inputs)
-    checkpoint = None
-    if args.engine == "volumetric":  # a long run keeps its partial sums next to its output
-        checkpoint = out.with_name(out.name + ".partial.npz")
-        if checkpoint.exists() and not args.resume:
-            raise OutputError("partial sums of an interrupted reference are there: --resume to go on from them, or "
-                              "delete them", file=checkpoint)  # fmt: skip
-        if args.resume and not checkpoint.exists():
-            raise ArgumentError(f"nothing to resume: {checkpoint} does not exist", field="--resume")
-    elif args.resume or args.target_error is not None:
-        raise ArgumentError("--resume and --target-error are the volumetric engine's (--engine volumetric)",
-                            field="--resume" if args.resume else "--target-error")  # fmt: skip
-    result = reference(
-        scene,
-        spp=args.spp,
-        seed=args.seed,
-        engine=args.engine,
-        visibility=args.visibility == "on",
-        size=size,
-        pixel=args.pixel,
-        heuristic=args.mis,
-        progress=not args.quiet,
-        workers=args.workers,
-        checkpoint=checkpoint,
-        keep_checkpoint=True,
-        target_error=args.target_error,
-    )
-    write_image(out, result.image)
-    if result.engine != "mitsuba":
-        write_image(stderr_path, result.stderr)
-    if checkpoint is not None:  # the images are safe: the partial sums go
-        PartialSums(checkpoint, "").remove()
-    print(
-        f"wrote {out}"
-        + (f" and {stderr_path}" if result.engine != "mitsuba" else "")
-        + f" ({result.spp} spp, {result.seconds:.1f} s, {result.samples_per_second / 1e6:.2f} M samples/s)"
-    )
+    if args.engine != "volumetric" and args.target_error is not None:
+        raise ArgumentError("--target-error is the volumetric engine's (--engine volumetric)", field="--target-error")
+    if args.engine == "mitsuba" and args.cluster is not None:
+        raise ArgumentError("the Mitsuba engine runs in this process; a cluster runs the numpy and volumetric "
+                            "engines", field="--cluster")  # fmt: skip
+    if args.workers is not None and args.workers < 1:
+        raise ArgumentError(f"workers must be at least 1 (got {args.workers})", field="--workers")
+    params = {"spp": args.spp, "seed": args.seed, "visibility": args.visibility, "pixel": args.pixel,
+              "heuristic": args.mis, "size": size, "target_error": args.target_error}  # fmt: skip
+    planned = plan(args.scene, args.output, lambda path: load_scene(path, camera=args.camera,
+                   environment=args.environment), engine=args.engine, resume=args.resume, params=params,
+                   overwrite=args.overwrite)  # fmt: skip
+    if all(item.up_to_date for item in planned):
+        place = None  # nothing to render: no cluster to reach
+    elif args.engine == "mitsuba":
+        place = places(1)
+    else:
+        place = places(args.workers, args.cluster)
+
+    def render(item):
+        return reference(item.scene, spp=args.spp, seed=args.seed, engine=args.engine,
+                         visibility=args.visibility == "on", size=size, pixel=args.pixel, heuristic=args.mis,
+                         progress=not args.quiet, checkpoint=item.checkpoint, keep_checkpoint=True,
+                         target_error=args.target_error)  # fmt: skip
+
+    try:
+        with using(place):  # the batch's references share it
+            make(planned, render)
+    finally:
+        if place is not None:
+            place.close()
     return 0
 
 
 def cmd_bench(args) -> int:
     from .bench import run_suite
 
-    run_suite(args.suite, Path(args.output), quick=args.quick)
+    run_suite(args.suite, Path(args.output), quick=args.quick, cluster=args.cluster)
     return 0
 
 
@@ -671,9 +660,14 @@ def build_parser() -> argparse.ArgumentParser:
         q.add_argument("--method", help="the renderer's method in the differential mode (default auto)")
 
     p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
-    p.add_argument("scene", help="scene file (.toml), or a glTF (.gltf, .glb) or OBJ (.obj + .mtl) file")
+    p.add_argument("scene", nargs="+", help="scene file (.toml), or a glTF (.gltf, .glb) or OBJ (.obj + .mtl) file; "
+                   "several: a batch written into the folder -o names")  # fmt: skip
     _asset_options(p)
-    p.add_argument("-o", "--output", help="output image (.exr or .npy); the standard error goes to NAME.stderr.exr")
+    p.add_argument("-o", "--output", help="output image (.exr or .npy; the standard error goes to NAME.stderr.exr), "
+                   "or an existing folder: STEM.exr per scene and references.json, the content key of each (a "
+                   "scene run again whose key has not changed is kept)")  # fmt: skip
+    p.add_argument("--overwrite", action="store_true", help="a batch: replace the images in the folder that its "
+                   "references.json does not say were made from these scenes and parameters")  # fmt: skip
     p.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument(
@@ -682,8 +676,10 @@ def build_parser() -> argparse.ArgumentParser:
         default="numpy",
         help="numpy (direct lighting, default), mitsuba, or volumetric (translucent media, all scattering orders)",
     )
-    p.add_argument("--workers", type=int, default=None, help="processes sharing the samples (volumetric engine; the "
-                   "same image for any number; default: every core)")  # fmt: skip
+    p.add_argument("--workers", type=int, default=None, help="processes sharing the work (the same image for any "
+                   "number; default: every core)")  # fmt: skip
+    p.add_argument("--cluster", metavar="ADDRESS", help="tcp://HOST:PORT of a Dask scheduler: its workers share the "
+                   "work (README, References on a cluster; the same image)")  # fmt: skip
     p.add_argument("--resume", action="store_true", help="volumetric engine: go on from OUTPUT.partial.npz, the "
                    "partial sums a killed run left (the image of an uninterrupted run)")  # fmt: skip
     p.add_argument("--target-error", type=float, default=None, help="volumetric engine: stop when the mean relative "
@@ -704,6 +700,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("suite", help="suite name: reference, arealights, ltc-cost, translucency, reflections, scratches")
     p.add_argument("-o", "--output", default="benchmarks/results", help="results folder (default benchmarks/results)")
     p.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke test")
+    p.add_argument("--cluster", metavar="ADDRESS", help="tcp://HOST:PORT of a Dask scheduler: its workers draw the "
+                   "suite's references (default: this machine's every core)")  # fmt: skip
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("compare", help="error metrics of TEST against REFERENCE")

@@ -35,10 +35,10 @@ def _crash_after(monkeypatch, blocks: int, error=KeyboardInterrupt) -> None:
     monkeypatch.setattr(volumetric._VolumetricJob, "sums", sums)
 
 
-@pytest.mark.parametrize("workers", [1, 2])
-def test_a_killed_run_resumed_gives_the_uninterrupted_image(tmp_path, monkeypatch, workers):
+@pytest.mark.parametrize("workers", [1, 2, "cluster"])
+def test_a_killed_run_resumed_gives_the_uninterrupted_image(tmp_path, monkeypatch, workers, request):
     """Ctrl-C after three blocks in one process (its sums written at once, not after SAVE_EVERY_S), then the run
-    resumed in one or two processes."""
+    resumed in one or two processes, or on a cluster of two workers (tests/reference/conftest.py)."""
     scene = reflets.load_dict(SCENE)
     whole = render_volumetric(scene, spp=8, seed=2, progress=False)
     saved = tmp_path / "ref.partial.npz"
@@ -48,7 +48,9 @@ def test_a_killed_run_resumed_gives_the_uninterrupted_image(tmp_path, monkeypatc
             render_volumetric(scene, spp=8, seed=2, progress=False, checkpoint=saved)
     with np.load(saved) as data:
         assert int(data["next_block"]) == 3  # the blocks done before the interruption
-    resumed = render_volumetric(scene, spp=8, seed=2, progress=False, checkpoint=saved, workers=workers)
+    place = {"cluster": request.getfixturevalue("cluster").scheduler_address} if workers == "cluster" else {}
+    resumed = render_volumetric(scene, spp=8, seed=2, progress=False, checkpoint=saved,
+                                workers=None if place else workers, **place)  # fmt: skip
     np.testing.assert_array_equal(resumed.image, whole.image)
     np.testing.assert_array_equal(resumed.stderr, whole.stderr)
     assert resumed.spp == 8 and not saved.exists()  # the finished run's partial sums are gone
@@ -129,8 +131,11 @@ def test_the_cli_keeps_an_interrupted_run_s_partial_sums(tmp_path, capsys):
 
 
 def test_every_core_by_default(monkeypatch):
-    """``reflets.reference(engine="volumetric")`` without ``workers`` shares the samples among every core."""
+    """``reflets.reference`` without ``workers`` shares the work among every core (its engines get no count: the
+    place is chosen by reflets.reference.parallel.places), or the place of an enclosing ``using`` block."""
     import os
+
+    from reflets.reference import parallel
 
     seen = {}
 
@@ -142,6 +147,51 @@ def test_every_core_by_default(monkeypatch):
     monkeypatch.setattr(os, "cpu_count", lambda: 7)
     with pytest.raises(StopIteration):
         reflets.reference(reflets.load_dict(SCENE), engine="volumetric", spp=2, progress=False)
-    assert seen["workers"] == 7
+    assert seen["workers"] is None and seen["cluster"] is None
+    assert parallel.places().processes == 7 and isinstance(parallel.places(1), parallel.InProcess)
+    with parallel.using(parallel.LocalProcesses(3)):
+        assert parallel.places().processes == 3
+    with pytest.raises(ArgumentError, match="not both"):
+        parallel.places(2, "tcp://127.0.0.1:8786")
     with pytest.raises(ArgumentError, match="at least 1"):
         reflets.reference(reflets.load_dict(SCENE), engine="volumetric", workers=0)
+
+
+def test_a_batch_of_scenes_into_a_folder_kept_by_content(tmp_path, capsys):
+    """``reflets reference a.toml b.toml -o refs/``: one image per scene and an index of what each was made from;
+    run again, the images whose scene and parameters did not change are kept; another image there is refused
+    unless --overwrite; every argument is checked before the first image."""
+    import json
+
+    from reflets.cli import main
+
+    scenes = []
+    for name, intensity in (("a", 10), ("b", 20)):
+        scene = tmp_path / f"{name}.toml"
+        scene.write_text("[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\nsize = [8, 6]\n[materials.m]\n"
+                         'type = "lambert"\n[[mesh]]\nshape = "sphere"\nmaterial = "m"\n[[light]]\ntype = "point"\n'
+                         f"position = [1, 2, 3]\nintensity = [{intensity}, {intensity}, {intensity}]\n")  # fmt: skip
+        scenes.append(str(scene))
+    refs = tmp_path / "refs"
+    refs.mkdir()
+    base = ["reference", *scenes, "-o", str(refs), "-q", "--workers", "1"]
+    args = [*base, "--spp", "2"]
+    assert main(args) == 0
+    index = json.loads((refs / "references.json").read_text())
+    assert sorted(index) == ["a.exr", "b.exr"] and (refs / "b.stderr.exr").exists()
+    before = (refs / "a.exr").stat().st_mtime_ns
+    capsys.readouterr()
+    assert main(args) == 0 and (refs / "a.exr").stat().st_mtime_ns == before
+    assert capsys.readouterr().out.count("up to date") == 2
+    assert main([*base, "--spp", "4"]) == 2  # other parameters: the images there are refused
+    assert "--overwrite" in capsys.readouterr().err and (refs / "a.exr").stat().st_mtime_ns == before
+    assert main([*base, "--spp", "4", "--overwrite"]) == 0
+    assert json.loads((refs / "references.json").read_text())["a.exr"]["spp"] == 4
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "a.toml").write_text(open(scenes[0]).read())
+    for bad in (["reference", scenes[0], str(tmp_path / "other" / "a.toml"), "-o", str(refs), "--overwrite"],
+                ["reference", *scenes, "-o", str(tmp_path / "missing")],
+                ["reference", *scenes]):  # fmt: skip
+        assert main(bad) == 2
+    err = capsys.readouterr().err
+    assert "would both be written" in err and "must exist" in err and "-o FOLDER" in err

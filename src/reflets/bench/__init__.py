@@ -61,7 +61,9 @@ def machine() -> dict:
     return info
 
 
-def run_suite(name: str, out_dir: Path, quick: bool = False) -> dict:
+def run_suite(name: str, out_dir: Path, quick: bool = False, cluster: str | None = None) -> dict:
+    """Run suite ``name`` and write its results in ``out_dir``; ``cluster``: the address of a Dask scheduler whose
+    workers draw the suite's references (reflets.reference.cluster), else this machine's every core."""
     run = suite(name)
     if not out_dir.parent.is_dir():  # as every command's outputs: its folder must exist (a typo creates nothing)
         raise OutputError(f"the results folder's parent {out_dir.parent} does not exist", file=out_dir)
@@ -71,7 +73,14 @@ def run_suite(name: str, out_dir: Path, quick: bool = False) -> dict:
         raise OutputError(f"cannot create the results folder ({exc.strerror})", file=out_dir) from None
     if not os.access(out_dir, os.W_OK | os.X_OK):  # found now, not after the suite's minutes of work
         raise OutputError("cannot write the results folder (permission denied)", file=out_dir)
-    results, markdown = run(quick, out_dir)
+    from ..reference.parallel import places, using
+
+    place = places(None, cluster)  # connected before the suite's minutes of work: a bad address is said at once
+    try:
+        with using(place):
+            results, markdown = run(quick, out_dir)
+    finally:
+        place.close()
     info = machine()
     results = {"suite": name, "quick": quick, "machine": info, **results}
     gl = info["opengl"].get("renderer", info["opengl"].get("error", "?"))

@@ -34,8 +34,9 @@ def bench_reference(quick: bool, out_dir) -> tuple[dict, str]:
         for engine, visibility in engines:
             rates = []
             for run in range(runs):
-                result = reference(
-                    scene, spp=spp, seed=run, engine=engine, visibility=visibility, size=size, progress=False
+                result = reference(  # one process: the throughput of one core (reference-scale: of several)
+                    scene, spp=spp, seed=run, engine=engine, visibility=visibility, size=size, progress=False,
+                    workers=1,
                 )
                 rates.append(result.samples_per_second)
             rows.append(

@@ -143,7 +143,6 @@ REFERENCE_MODEL = {
 
 
 def _objects(size, spp: int, reference_spp: int, volumetric_spp: int, out_dir) -> tuple[dict, list[str]]:
-    import os
 
     import reflets
 
@@ -182,7 +181,7 @@ def _objects(size, spp: int, reference_spp: int, volumetric_spp: int, out_dir) -
         name = f"renderer_marble_{kind}{size[0]}x{size[1]}_{volumetric_spp}spp.npz"
 
         def render(scene=marble):
-            return render_volumetric(scene, spp=volumetric_spp, seed=0, workers=os.cpu_count() or 1, progress=True)
+            return render_volumetric(scene, spp=volumetric_spp, seed=0, workers=None, progress=True)
 
         volumetric, references[light] = stored_or_rendered(
             out_dir / "references" / name, marble, render, spp=volumetric_spp, seed=0

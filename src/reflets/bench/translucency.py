@@ -25,7 +25,6 @@ technique's cost on the document's Fig 7.2 settings.
 
 from __future__ import annotations
 
-import os
 import statistics
 from pathlib import Path
 
@@ -116,18 +115,17 @@ DOC_SIZE = (1024, 768)
 
 
 def bunny_reference(size, spp: int, out_dir: Path, *, eta: float = 1.3, seed: int = 11, progress: bool = True):
-    """Volumetric path tracing of the Fig 7.2 bunny (skin1, 100 mm) in all the machine's cores, stored under
-    ``out_dir/references/`` and used again while the scene, ``spp`` and ``seed`` match (reflets.reference.store):
-    at the document's 1024×768 it took 2281 s in two processes. Returns (image, stored-file info)."""
+    """Volumetric path tracing of the Fig 7.2 bunny (skin1, 100 mm) on every core (or the cluster of
+    ``reflets bench --cluster``), stored under ``out_dir/references/`` and used again while the scene, ``spp`` and
+    ``seed`` match (reflets.reference.store): at the document's 1024×768 it took 2281 s in two processes. Returns
+    (image, stored-file info)."""
     from ..reference.store import stored_or_rendered
     from ..reference.volumetric import render_volumetric
 
     scene = _object_scene("bunny.ply", "skin1", 100.0, size, eta=eta)
     name = f"translucency_bunny_eta{eta:g}_{size[0]}x{size[1]}_{spp}spp.npz"
-    workers = os.cpu_count() or 1
-
-    def render():
-        return render_volumetric(scene, spp=spp, seed=seed, workers=workers, progress=progress)
+    def render():  # every core, or the cluster of `reflets bench --cluster`
+        return render_volumetric(scene, spp=spp, seed=seed, workers=None, progress=progress)
 
     return stored_or_rendered(out_dir / "references" / name, scene, render, spp=spp, seed=seed)
 
@@ -295,7 +293,7 @@ def _curvature_rows(bunny_ref, size) -> list[dict]:
                 "light": [{"type": "point", "position": [2, 3, 2], "intensity": [20, 20, 20]}],
             }
         )
-        ref = render_volumetric(scene, spp=64, seed=1, progress=False, workers=os.cpu_count() or 1)
+        ref = render_volumetric(scene, spp=64, seed=1, progress=False, workers=None)
         cases.append((f"sphere r = {radius_mm:g} mm, better_dipole", scene, ref))
     rows = []
     for label, scene, ref in cases:

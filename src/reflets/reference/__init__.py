@@ -8,7 +8,6 @@
 
 from __future__ import annotations
 
-import os
 import time
 from pathlib import Path
 from typing import Literal
@@ -31,6 +30,7 @@ def reference(
     heuristic: Literal["power", "balance"] = "power",
     progress: bool = True,
     workers: int | None = None,
+    cluster=None,
     adaptive_error: float | None = None,
     adaptive_spp: int = 16384,
     checkpoint: str | Path | None = None,
@@ -48,8 +48,12 @@ def reference(
         translucent medium inside its smooth boundary, one point, directional, quad, polygon or environment light: the
         ``translucent`` technique's single + multiple scattering, reflets.reference.volumetric; pixel centres, with
         shadows)
-    workers : processes sharing the samples (volumetric engine: the same image for any number; default every core
-        of this machine, ``os.cpu_count()``)
+    workers : processes of this machine sharing the work (numpy and volumetric engines: the same image for any
+        number; default every core of this machine, ``os.cpu_count()``, or the place of an enclosing
+        ``reflets.reference.parallel.using`` block)
+    cluster : the address of a Dask scheduler (``tcp://HOST:8786``), or a connected
+        reflets.reference.cluster.Cluster, whose workers share the work instead (the scene and its files travel by
+        content; the same image again)
     checkpoint, keep_checkpoint, target_error : (volumetric engine) a file of the partial sums to go on from after
         a kill (kept at the end with ``keep_checkpoint``: the caller removes it once it has written the images),
         and the mean relative standard error to stop at (reflets.reference.volumetric.render_volumetric)
@@ -65,17 +69,18 @@ def reference(
     scene = as_scene(scene)
     size = check_size(size)
     check_spp(spp)  # a count the user gives is bounded (as render's), before any work
-    if workers is None:
-        workers = os.cpu_count() or 1
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ArgumentError(f"workers must be at least 1 (got {workers!r})", field="workers")
+    if engine == "mitsuba" and cluster is not None:
+        raise ArgumentError("the Mitsuba engine runs in this process; a cluster runs the numpy and volumetric "
+                            "engines", field="cluster")  # fmt: skip
     if engine != "volumetric" and (checkpoint is not None or target_error is not None):
         raise ArgumentError("checkpoints and a target error are the volumetric engine's (--engine volumetric)",
                             field="checkpoint" if checkpoint is not None else "target_error")  # fmt: skip
     if engine == "numpy":
         return MonteCarloReference(scene, visibility=visibility, heuristic=heuristic).render(
             spp, seed=seed, size=size, pixel=pixel, progress=progress, adaptive_error=adaptive_error,
-            adaptive_spp=adaptive_spp,
+            adaptive_spp=adaptive_spp, workers=workers, cluster=cluster,
         )
     if engine == "mitsuba":
         if not visibility:
@@ -105,7 +110,7 @@ def reference(
             )
         start = time.perf_counter()
         result = render_volumetric(scene, spp=spp, seed=seed, size=size, progress=progress, workers=workers,
-                                   checkpoint=checkpoint, keep_checkpoint=keep_checkpoint,
+                                   cluster=cluster, checkpoint=checkpoint, keep_checkpoint=keep_checkpoint,
                                    target_error=target_error)  # fmt: skip
         return ReferenceResult(result.image, result.stderr, result.spp, time.perf_counter() - start,
                                engine="volumetric")  # fmt: skip

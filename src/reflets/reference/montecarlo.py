@@ -42,6 +42,7 @@ from ..scene.model import DirectionalLight, PointLight, Scene
 from .geometry import EMITTERS, MESHES, SceneGeometry
 from .lights import EnvironmentSampler, PolygonSampler
 from .mirrors import MirrorBounce
+from .parallel import places
 from .transmission import MAX_CROSSINGS, NUMBERS_PER_CROSSING, Transmission
 
 RAYS_PER_CHUNK = 1 << 17
@@ -132,7 +133,11 @@ class MonteCarloReference:
         progress: bool = True,
         adaptive_error: float | None = None,
         adaptive_spp: int = 16384,
+        workers: int | None = 1,
+        cluster=None,
     ) -> ReferenceResult:
+        """``workers`` processes of this machine, or the workers of the Dask cluster at ``cluster``, share the
+        tiles (reflets.reference.parallel): each tile draws from its own stream, so the image is the same."""
         if spp < 1:
             raise ArgumentError(f"must be ≥ 1, got {spp}", field="spp")
         if pixel not in ("center", "box"):
@@ -141,22 +146,28 @@ class MonteCarloReference:
             _check_adaptive(adaptive_error, adaptive_spp, spp)
         width, height = size or self.scene.camera.size
         n_pixels = width * height
-        check(
-            "size",
-            REFERENCE_CHUNK_BYTES + n_pixels * REFERENCE_BYTES_PER_PIXEL,
-            value=f"{width}x{height}",
-            what=f"the reference: {n_pixels:,} pixels × {REFERENCE_BYTES_PER_PIXEL} B + a chunk of rays",
-            fits=lambda budget: fitting_size(
-                width, height, REFERENCE_BYTES_PER_PIXEL, max(budget - REFERENCE_CHUNK_BYTES, 0)
-            ),
-        )
-        mean = np.zeros((n_pixels, 3))
-        err = np.zeros((n_pixels, 3))
-        start = time.perf_counter()
-        self._estimate(np.arange(n_pixels), spp, (seed,), mean, err, width, height, pixel, progress)
-        counts = np.full(n_pixels, spp)
-        if adaptive_error is not None:
-            self._refine(mean, err, counts, adaptive_error, adaptive_spp, seed, width, height, pixel)
+        place = places(workers, cluster)
+        chunks = place.processes * REFERENCE_CHUNK_BYTES  # each process of this machine holds a chunk of rays
+        try:
+            check(
+                "size",
+                chunks + n_pixels * REFERENCE_BYTES_PER_PIXEL,
+                value=f"{width}x{height}",
+                what=f"the reference: {n_pixels:,} pixels × {REFERENCE_BYTES_PER_PIXEL} B + a chunk of rays"
+                + (f" in each of {place.processes} processes" if place.processes > 1 else ""),
+                fits=lambda budget: fitting_size(width, height, REFERENCE_BYTES_PER_PIXEL, max(budget - chunks, 0)),
+            )
+            mean = np.zeros((n_pixels, 3))
+            err = np.zeros((n_pixels, 3))
+            start = time.perf_counter()
+            frame = (width, height, pixel)
+            with place.start(MonteCarloReference, (self.scene, self.visibility, self.heuristic), local=self) as tiles:
+                self._estimate(tiles, np.arange(n_pixels), spp, (seed,), mean, err, frame, progress, place.label)
+                counts = np.full(n_pixels, spp)
+                if adaptive_error is not None:
+                    self._refine(tiles, mean, err, counts, adaptive_error, adaptive_spp, seed, frame)
+        finally:
+            place.close()
         seconds = time.perf_counter() - start
         return ReferenceResult(
             image=mean.reshape(height, width, 3).astype(np.float32),
@@ -166,26 +177,36 @@ class MonteCarloReference:
             pixel_spp=counts.reshape(height, width) if adaptive_error is not None else None,
         )
 
-    def _estimate(self, pixels, spp, stream, mean, err, width, height, pixel, progress=False) -> None:
-        """Mean and standard error of ``spp`` samples at each of ``pixels`` (flat indices), in chunks whose random
-        streams are seeded by ``stream`` + (chunk index,)."""
+    def _estimate(self, tiles, pixels, spp, stream, mean, err, frame, progress=False, label="") -> None:
+        """Mean and standard error of ``spp`` samples at each of ``pixels`` (flat indices), in tiles whose random
+        streams are seeded by ``stream`` + (tile index,), drawn wherever ``tiles`` (a session of
+        reflets.reference.parallel) runs them."""
         chunk = max(1, RAYS_PER_CHUNK // spp)
-        starts = range(0, len(pixels), chunk)
-        bar = _progress(progress, len(starts))
-        for index, first in enumerate(starts):
-            ids = pixels[first : first + chunk]
-            rng = np.random.default_rng([*stream, index])
-            values = self._pixels(ids, width, height, spp, rng, pixel)  # (P, spp, 3)
-            mean[ids] = values.mean(axis=1)
-            err[ids] = 0.0
-            if spp > 1:
-                std = values.std(axis=1, ddof=1)
-                std[std <= 1e-9 * np.abs(mean[ids])] = 0.0  # rounding noise of a deterministic value
-                err[ids] = std / np.sqrt(spp)
-            bar.advance()
-        bar.close()
+        tasks = [(pixels[first : first + chunk], spp, (*stream, index), frame)
+                 for index, first in enumerate(range(0, len(pixels), chunk))]  # fmt: skip
+        bar = _progress(progress, len(tasks), label)
+        try:
+            for index, (tile_mean, tile_err) in tiles.run(tasks, [1] * len(tasks), bar.advance):
+                ids = tasks[index][0]
+                mean[ids], err[ids] = tile_mean, tile_err
+        finally:
+            bar.close()
 
-    def _refine(self, mean, err, counts, target, max_spp, seed, width, height, pixel) -> None:
+    def task(self, task, advance) -> tuple[np.ndarray, np.ndarray]:
+        """One tile (reflets.reference.parallel): (pixel indices, spp, its stream, (width, height, pixel)) → the
+        pixels' mean and standard error."""
+        ids, spp, stream, (width, height, pixel) = task
+        values = self._pixels(ids, width, height, spp, np.random.default_rng(stream), pixel)  # (P, spp, 3)
+        mean = values.mean(axis=1)
+        err = np.zeros_like(mean)
+        if spp > 1:
+            std = values.std(axis=1, ddof=1)
+            std[std <= 1e-9 * np.abs(mean)] = 0.0  # rounding noise of a deterministic value
+            err = std / np.sqrt(spp)
+        advance(1)
+        return mean, err
+
+    def _refine(self, tiles, mean, err, counts, target, max_spp, seed, frame) -> None:
         """Adaptive rounds (module docstring): noisy pixels re-rendered alone with 4× the samples."""
         weights = LUMINANCE
         for round_ in range(1, 64):
@@ -195,8 +216,9 @@ class MonteCarloReference:
             if noisy.size == 0:
                 return
             spp = int(min(counts[noisy].max() * 4, max_spp))
-            self._estimate(noisy, spp, (seed, round_, 1), mean, err, width, height, pixel)
+            self._estimate(tiles, noisy, spp, (seed, round_, 1), mean, err, frame)
             counts[noisy] = spp
+
     # --------------------------------------------------------------------------------------- per chunk
     def _pixels(self, ids, width, height, spp, rng, pixel) -> np.ndarray:
         u = _latin_hypercube(rng, len(ids), spp, self.dims).reshape(-1, self.dims)
@@ -385,7 +407,7 @@ class MonteCarloReference:
 
 
 class _NoProgress:
-    def advance(self) -> None:
+    def advance(self, tiles: int = 1) -> None:
         pass
 
     def close(self) -> None:
@@ -393,11 +415,11 @@ class _NoProgress:
 
 
 class _RichProgress:
-    def __init__(self, total: int):
+    def __init__(self, total: int, label: str = ""):
         from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
         self.progress = Progress(
-            TextColumn("reference"),
+            TextColumn("reference" + label),
             BarColumn(),
             TextColumn("{task.completed}/{task.total}"),
             TimeRemainingColumn(),
@@ -406,12 +428,12 @@ class _RichProgress:
         self.task = self.progress.add_task("reference", total=total)
         self.progress.start()
 
-    def advance(self) -> None:
-        self.progress.advance(self.task)
+    def advance(self, tiles: int = 1) -> None:
+        self.progress.advance(self.task, tiles)
 
     def close(self) -> None:
         self.progress.stop()
 
 
-def _progress(enabled: bool, total: int):
-    return _RichProgress(total) if enabled and total > 1 else _NoProgress()
+def _progress(enabled: bool, total: int, label: str = ""):
+    return _RichProgress(total, label) if enabled and total > 1 else _NoProgress()

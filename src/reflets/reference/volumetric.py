@@ -39,6 +39,7 @@ from ..translucency.optics import (
     sample_henyey_greenstein,
 )
 from .checkpoint import PartialSums, reference_key
+from .parallel import ordered, places
 from .results import VolumetricImage
 
 
@@ -293,7 +294,8 @@ def render_volumetric(
     progress: bool = True,
     refract: bool | None = None,
     orders: int | None = None,
-    workers: int = 1,
+    workers: int | None = 1,
+    cluster=None,
     checkpoint: str | Path | None = None,
     keep_checkpoint: bool = False,
     target_error: float | None = None,
@@ -318,7 +320,8 @@ def render_volumetric(
     The samples are drawn in blocks (:func:`sample_blocks`: fixed by ``spp`` and the pixels, never by the
     workers), each from its own child of ``seed``'s SeedSequence, and their sums added in block order:
     ``workers > 1`` shares the blocks between that many processes (a reference at the document's 1024×768 takes
-    an hour of one core) and gives the same image and standard error, bit for bit, as one.
+    an hour of one core), ``cluster`` between the workers of a Dask cluster (reflets.reference.cluster), and both
+    give the same image and standard error, bit for bit, as one process.
 
     ``checkpoint``: an ``.npz`` file the partial sums are written to as the blocks complete — every
     ``checkpoint.SAVE_EVERY_S`` seconds, and at once on Ctrl-C or an error (a kill loses the blocks since the last
@@ -329,22 +332,27 @@ def render_volumetric(
     (luminance) is at most this (``result.spp``: the samples taken) — the same block for any number of workers."""
     if size is not None:
         scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"size": tuple(size)})})
-    _check_memory(scene, workers, refract)
     if target_error is not None and (isinstance(target_error, bool) or not isinstance(target_error, numbers.Real)
                                      or not 0 < target_error < 1):  # fmt: skip
         raise ArgumentError(f"must be a number in (0, 1), got {target_error!r}", field="target_error")
-    job = _VolumetricJob(scene, refract, orders)
-    blocks = sample_blocks(spp, len(job.pix))
-    seeds = np.random.SeedSequence(seed).spawn(len(blocks))
-    partial = None
-    if checkpoint is not None:
-        key = reference_key(scene, engine="volumetric", sampling=SAMPLING_VERSION, spp=spp, seed=seed,
-                            refract=refract, orders=orders, blocks=blocks)  # fmt: skip
-        partial = PartialSums(checkpoint, key)
-    # an albedo map: the light leaving the medium towards the camera × its texel where it leaves (the camera hit)
-    tint = job.material.tint(job.geometry.uv_sets(job.hits.prim[job.pix], job.hits.u[job.pix], job.hits.v[job.pix]))
-    runner = _BlockRunner(job, blocks, seeds, tint, partial, target_error)
-    runner.run(scene, refract, orders, workers, progress)
+    place = places(workers, cluster)
+    try:
+        _check_memory(scene, place.processes, refract)
+        job = _VolumetricJob(scene, refract, orders)
+        blocks = sample_blocks(spp, len(job.pix))
+        seeds = np.random.SeedSequence(seed).spawn(len(blocks))
+        partial = None
+        if checkpoint is not None:
+            key = reference_key(scene, engine="volumetric", sampling=SAMPLING_VERSION, spp=spp, seed=seed,
+                                refract=refract, orders=orders, blocks=blocks)  # fmt: skip
+            partial = PartialSums(checkpoint, key)
+        # an albedo map: the light leaving the medium towards the camera × its texel where it leaves (the camera hit)
+        tint = job.material.tint(job.geometry.uv_sets(job.hits.prim[job.pix], job.hits.u[job.pix],
+                                                      job.hits.v[job.pix]))  # fmt: skip
+        runner = _BlockRunner(job, blocks, seeds, tint, partial, target_error)
+        runner.run(place, (scene, refract, orders), progress)
+    finally:
+        place.close()
     if partial is not None and not keep_checkpoint:
         partial.remove()
     mean, var = mean_and_variance(runner.total, runner.total2, runner.samples, tint)
@@ -395,6 +403,11 @@ class _VolumetricJob:
         self.material = material
         self.refracting = abs(material.eta - 1.0) > 1e-9 if refract is None else refract
         self.label = "volumetric reference" + (" (refracting boundary)" if self.refracting else "")
+
+    def task(self, task, advance) -> tuple[np.ndarray, np.ndarray]:
+        """A block of samples (reflets.reference.parallel): (spp, its SeedSequence) → its sums."""
+        spp, seed = task
+        return self.sums(spp, np.random.default_rng(seed), advance)
 
     def sums(self, spp: int, rng, advance) -> tuple[np.ndarray, np.ndarray]:
         """Per-pixel Σ and Σ² over ``spp`` samples (P, 3); ``advance(k)`` after every k samples done."""
@@ -460,21 +473,6 @@ class _VolumetricJob:
         return total, total2
 
 
-_WORKER_JOB: _VolumetricJob | None = None
-
-
-def _init_worker(scene, refract, orders) -> None:
-    global _WORKER_JOB
-    _WORKER_JOB = _VolumetricJob(scene, refract, orders)
-
-
-def _worker_sums(task) -> tuple[int, np.ndarray, np.ndarray]:
-    """One block's sums in a worker process: (block index, Σ, Σ²)."""
-    index, spp, seed = task
-    total, total2 = _WORKER_JOB.sums(spp, np.random.default_rng(seed), lambda k: None)
-    return index, total, total2
-
-
 def mean_and_variance(total, total2, n: int, tint) -> tuple[np.ndarray, np.ndarray]:
     """Per-pixel mean of ``n`` samples from their Σ and Σ², and the variance of that mean, both tinted by the
     albedo map where the light leaves."""
@@ -496,7 +494,7 @@ def sample_blocks(spp: int, pixels: int) -> list[int]:
 
 
 class _BlockRunner:
-    """Runs a reference's blocks of samples — in this process or in ``workers`` others — and adds their sums in
+    """Runs a reference's blocks of samples — wherever reflets.reference.parallel places them — and adds their sums in
     block order, whatever order they finish in (so that the floating-point sums equal one process's, bit for bit);
     goes on from a checkpoint and writes it as it goes (at once on an interruption or an error, and at the end: the
     caller removes it once the images are safe), stops at a target error, and shows the samples done, the time left
@@ -536,54 +534,31 @@ class _BlockRunner:
         if self.partial is not None and self.next_block > 0:
             self.partial.save(self.next_block, self.total, self.total2, force=force)
 
-    def run(self, scene, refract, orders, workers: int, progress: bool) -> None:
-        todo = list(range(self.next_block, len(self.blocks)))
+    def run(self, place, build_args: tuple, progress: bool) -> None:
+        """Add the blocks still to do, drawn where ``place`` says (reflets.reference.parallel.places)."""
+        first = self.next_block
+        todo = self.blocks[first:]
         if not todo or (self.target is not None and self.error() <= self.target):
             return  # the checkpoint of a finished run
-        label = self.job.label + (f" ({workers} processes)" if workers > 1 else "")
         columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
                    TimeRemainingColumn(), TextColumn("{task.fields[error]}"))  # fmt: skip
         # the time left from the whole run's pace (blocks of a large image take minutes: rich's default 30 s window
         # would hold one)
         with Progress(*columns, disable=not progress, transient=True, speed_estimate_period=24 * 3600) as bar:
-            task = bar.add_task(label, total=sum(self.blocks), completed=self.samples, error="")
-
-            def added(t, t2) -> bool:
-                done = self._add(t, t2)
-                bar.update(task, error=f"σ/μ {self.error():.3g}")
-                return done
-
+            task = bar.add_task(self.job.label + place.label, total=sum(self.blocks), completed=self.samples,
+                                error="")  # fmt: skip
+            tasks = [(spp, self.seeds[first + i]) for i, spp in enumerate(todo)]
             try:
-                if workers > 1:
-                    self._in_processes(todo, scene, refract, orders, workers, added, lambda k: bar.advance(task, k))
-                else:
-                    for index in todo:
-                        rng = np.random.default_rng(self.seeds[index])
-                        t, t2 = self.job.sums(self.blocks[index], rng, lambda k: bar.advance(task, k))
-                        if added(t, t2):
+                with place.start(_VolumetricJob, build_args, local=self.job) as session:
+                    results = session.run(tasks, todo, lambda k: bar.advance(task, k))
+                    for _, (t, t2) in ordered(results):
+                        done = self._add(t, t2)
+                        bar.update(task, error=f"σ/μ {self.error():.3g}")
+                        if done:
                             break
             except BaseException:  # a kill, Ctrl-C or an error: what was added is kept
                 self._save(force=True)
                 raise
-
-    def _in_processes(self, todo: list[int], scene, refract, orders, workers: int, added, advance) -> None:
-        import multiprocessing
-
-        done: dict[int, tuple] = {}  # blocks finished ahead of the next one to add
-        # fork where there is one: scripts and notebooks without a __main__ guard work (the workers touch no GL)
-        context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-        pool = context.Pool(workers, initializer=_init_worker, initargs=(scene, refract, orders))
-        try:
-            tasks = [(index, self.blocks[index], self.seeds[index]) for index in todo]
-            for index, t, t2 in pool.imap_unordered(_worker_sums, tasks):
-                done[index] = (t, t2)
-                advance(self.blocks[index])
-                while self.next_block in done:
-                    if added(*done.pop(self.next_block)):
-                        return
-        finally:
-            pool.terminate()  # an early stop, an error or Ctrl-C: the blocks still running are dropped at once
-            pool.join()
 
 
 # ------------------------------------------------------------------------------ refracting boundary (η ≠ 1)

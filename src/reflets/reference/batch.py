@@ -1,0 +1,145 @@
+"""``reflets reference``: one scene into one image, or a batch of scenes into a folder kept by content.
+
+    reflets reference scene.toml -o scene.ref.exr            # and scene.ref.stderr.exr
+    reflets reference scenes/*.toml -o refs/ [--cluster tcp://HOST:8786]
+
+Everything is checked before the first reference starts (each scene read and validated, each output's folder,
+name and extension, no output equal to an input, no two outputs with one name), so a typo fails in seconds, not
+after an hour of work. A batch writes ``refs/STEM.exr`` and ``refs/STEM.stderr.exr`` per scene and an index,
+``refs/references.json``: the content key of what each image was made from (the scene, its files' contents and
+the reference's parameters: reflets.reference.store.fingerprint). Run again, a batch keeps the images whose key
+has not changed and renders the others; an image there that the index does not vouch for is refused (replaced
+with ``--overwrite``). The references of a batch share one place (reflets.reference.parallel: every core, or one cluster
+connection).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import ArgumentError, OutputError
+from .checkpoint import PartialSums
+
+INDEX = "references.json"
+
+
+@dataclass
+class Planned:
+    """One reference to make: its scene, its outputs and, in a batch, its content key."""
+
+    source: Path
+    scene: object
+    out: Path
+    stderr: Path
+    checkpoint: Path | None
+    key: str | None = None  # a batch's content key (None: a single output, not indexed)
+    up_to_date: bool = False
+
+
+def plan(sources: list[str], output: str | None, load: Callable, *, engine: str, resume: bool, params: dict,
+         overwrite: bool = False) -> list[Planned]:  # fmt: skip
+    """The references to make, every argument checked (module docstring); ``params`` the reference's
+    parameters that make its content key (spp, seed, size, ...); ``overwrite``: a batch replaces the images its
+    index does not vouch for (refused otherwise)."""
+    from ..imageio import check_not_input, check_output_path
+
+    folder = Path(output) if output else None
+    batch = len(sources) > 1 or (folder is not None and folder.is_dir())
+    if batch and folder is None:
+        raise ArgumentError("several scenes need -o FOLDER (an existing folder)", field="-o")
+    if batch and not folder.is_dir():
+        raise OutputError("several scenes are written into a folder: it must exist", file=folder)
+    index = _read_index(folder / INDEX) if batch else {}
+    planned: list[Planned] = []
+    for source in sources:
+        scene = load(source)
+        if batch:
+            out = folder / (Path(source).stem + ".exr")
+        else:
+            out = folder or Path(Path(source).stem + ".ref.exr")
+        check_output_path(out, (".exr", ".npy"))
+        stderr = out.with_name(out.stem + ".stderr" + out.suffix)
+        inputs = scene.input_files() | {Path(source)}
+        for path in (out, stderr):
+            check_not_input(path, inputs)
+        clash = next((p for p in planned if p.out.resolve() == out.resolve()), None)
+        if clash is not None:
+            raise ArgumentError(f"{clash.source} and {source} would both be written to {out}: give the scenes "
+                                "different names", field="scene")  # fmt: skip
+        item = Planned(Path(source), scene, out, stderr, _checkpoint(out, engine, resume, batch))
+        if batch:
+            from .store import fingerprint
+
+            item.key = fingerprint(scene, engine=engine, **params)[0]
+            entry = index.get(out.name, {})
+            made = out.exists() and (engine == "mitsuba" or stderr.exists())
+            item.up_to_date = made and entry.get("key") == item.key
+            if not item.up_to_date and not overwrite:
+                for path in (out, stderr):
+                    if path.exists():
+                        raise OutputError(f"exists and {folder / INDEX} does not say it was made from this scene "
+                                          "and these parameters: --overwrite to replace it, or write elsewhere",
+                                          file=path)  # fmt: skip
+        planned.append(item)
+    return planned
+
+
+def _checkpoint(out: Path, engine: str, resume: bool, batch: bool) -> Path | None:
+    """A volumetric reference keeps its partial sums next to its output (OUTPUT.partial.npz): there, they are gone
+    on from with ``--resume`` only; ``--resume`` with none there is an error for one scene (nothing to resume), a
+    fresh start for a batch's scene."""
+    if engine != "volumetric":
+        if resume:
+            raise ArgumentError("--resume is the volumetric engine's (--engine volumetric)", field="--resume")
+        return None
+    checkpoint = out.with_name(out.name + ".partial.npz")
+    if checkpoint.exists() and not resume:
+        raise OutputError("partial sums of an interrupted reference are there: --resume to go on from them, or "
+                          "delete them", file=checkpoint)  # fmt: skip
+    if resume and not batch and not checkpoint.exists():
+        raise ArgumentError(f"nothing to resume: {checkpoint} does not exist", field="--resume")
+    return checkpoint
+
+
+def _read_index(path: Path) -> dict:
+    if not path.exists():
+        return {}
+    try:
+        index = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise OutputError(f"not a reflets index of references ({exc}): move it away", file=path) from None
+    if not isinstance(index, dict) or not all(isinstance(v, dict) for v in index.values()):
+        raise OutputError("not a reflets index of references: move it away", file=path)
+    return index
+
+
+def make(planned: list[Planned], render: Callable[[Planned], object], say: Callable[[str], None] = print) -> None:
+    """Render each planned reference (``render(item)`` → a ReferenceResult) and write its images; a batch's index
+    is written after each one, so that a batch stopped half-way keeps what it finished."""
+    from ..imageio import write_image
+    from ..jsonio import write
+
+    for item in planned:
+        if item.up_to_date:
+            say(f"kept {item.out}: up to date (same scene, files and parameters)")
+            continue
+        result = render(item)
+        write_image(item.out, result.image)
+        if result.engine != "mitsuba":
+            write_image(item.stderr, result.stderr)
+        if item.checkpoint is not None:  # the images are safe: the partial sums go
+            PartialSums(item.checkpoint, "").remove()
+        if item.key is not None:
+            index_path = item.out.parent / INDEX
+            index = _read_index(index_path)
+            index[item.out.name] = {"key": item.key, "scene": str(item.source), "engine": result.engine,
+                                    "spp": result.spp, "seconds": round(result.seconds, 3)}  # fmt: skip
+            write(index_path, index, indent=2)
+        say(
+            f"wrote {item.out}"
+            + (f" and {item.stderr}" if result.engine != "mitsuba" else "")
+            + f" ({result.spp} spp, {result.seconds:.1f} s, {result.samples_per_second / 1e6:.2f} M samples/s)"
+        )

@@ -1,0 +1,268 @@
+"""References on a cluster, through Dask distributed (why Dask and not Ray: docs/reference-scale.md).
+
+Start a scheduler and workers (``dask scheduler`` on one machine, ``dask worker tcp://HOST:8786`` on each of the
+others, after ``pip install reflets`` there), then ``reflets reference SCENE --cluster tcp://HOST:8786``. A
+reference's tasks (reflets.reference.parallel) go to the workers; nothing is assumed shared between the machines
+but the scheduler's address:
+
+- **the scene travels by content**: its description, and every file it reads (meshes, textures, maps, measured
+  BRDFs) keyed by SHA-256. Each worker keeps the files it was sent (``cache_dir("cluster")``) and is sent only the
+  ones it lacks, then lays them out as on this machine (relative references inside a glTF hold) under a folder
+  named by the scene's content key;
+- **versions are checked first**: every worker runs the same reflets, NumPy, Python (major.minor) and Dask as this
+  process (the random streams and the sums bit for bit), or the run stops before any task, in one line;
+- **a lost worker's tasks run again** elsewhere (Dask reschedules the tasks of a worker that dies); each task draws
+  from its own random stream and the results are put together by task index, so the image is the same.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import sys
+import uuid
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ..cache import cache_dir, content_key
+from ..errors import ArgumentError, RefletsError
+
+#: seconds to reach the scheduler, then for a first worker to be there
+CONNECT_TIMEOUT_S = 10.0
+WORKER_TIMEOUT_S = 30.0
+#: the packages whose versions must match between this process and every worker
+MATCHED = ("reflets", "numpy", "distributed", "cloudpickle")
+
+
+def engine_version() -> str | None:
+    """The cluster engine's version (``reflets info``), None when it is not installed."""
+    from importlib import metadata
+
+    try:
+        return metadata.version("distributed")
+    except metadata.PackageNotFoundError:
+        return None
+
+
+def versions() -> dict[str, str]:
+    """This process's versions of what the results depend on (run on each worker too)."""
+    from importlib import metadata
+
+    found = {"python": ".".join(map(str, sys.version_info[:2]))}
+    for name in MATCHED:
+        try:
+            found[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            found[name] = "not installed"
+    return found
+
+
+def check_versions(address: str, here: dict[str, str], workers: dict[str, dict[str, str]]) -> None:
+    """One line naming the first worker whose versions differ from this process's."""
+    for worker, theirs in sorted(workers.items()):
+        wrong = [f"{name} {theirs.get(name)} (here {mine})" for name, mine in here.items() if theirs.get(name) != mine]
+        if wrong:
+            raise ArgumentError(f"worker {worker} runs {', '.join(wrong)}: install the same versions on every "
+                                "machine", field=f"--cluster {address}")  # fmt: skip
+
+
+def connect(address: str) -> Cluster:
+    """A Dask scheduler at ``address`` (``tcp://HOST:PORT``) with at least one worker whose versions match:
+    or one line, exit 2 — a malformed address, a scheduler that does not answer within CONNECT_TIMEOUT_S, no
+    worker within WORKER_TIMEOUT_S, a worker without reflets or with other versions."""
+    import distributed
+    from distributed.comm import parse_address
+
+    where = f"--cluster {address}"
+    if not isinstance(address, str) or not address.strip():
+        raise ArgumentError("an address is needed, like tcp://HOST:8786", field="--cluster")
+    try:
+        scheme, location = parse_address(address)
+        host, _, port = location.rpartition(":")
+        if scheme != "tcp" or not host or not port.isdigit() or not 0 < int(port) < 65536:
+            raise ValueError(location)
+    except ValueError:
+        raise ArgumentError("not a scheduler address; expected tcp://HOST:PORT (a Dask scheduler, "
+                            "`dask scheduler` prints it)", field=where) from None  # fmt: skip
+    try:
+        client = distributed.Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
+    except (OSError, TimeoutError) as exc:
+        raise ArgumentError(f"no Dask scheduler answered within {CONNECT_TIMEOUT_S:g} s ({type(exc).__name__}): "
+                            "is `dask scheduler` running there, and the port open?", field=where) from None  # fmt: skip
+    try:
+        client.wait_for_workers(1, timeout=WORKER_TIMEOUT_S)
+    except (OSError, TimeoutError):
+        client.close()
+        raise ArgumentError(f"the scheduler has no worker (none joined within {WORKER_TIMEOUT_S:g} s): start "
+                            "`dask worker ADDRESS` on the machines", field=where) from None  # fmt: skip
+    try:
+        theirs = client.run(versions)
+    except Exception as exc:  # noqa: BLE001 — a worker that cannot even import reflets: said in one line
+        client.close()
+        raise ArgumentError(f"a worker could not run reflets ({type(exc).__name__}: {exc}): `pip install "
+                            f"reflets=={versions()['reflets']}` on every machine", field=where) from None  # fmt: skip
+    try:
+        check_versions(address, versions(), theirs)
+    except ArgumentError:
+        client.close()
+        raise
+    return Cluster(address, client, len(theirs))
+
+
+class Cluster:
+    """A connected Dask cluster; ``start(build, args)`` as reflets.reference.parallel's places."""
+
+    def __init__(self, address: str, client, workers: int):
+        self.address, self.client, self.workers = address, client, workers
+        self.label = f" ({workers} workers at {address})"
+
+    processes = 1  # of this machine, for its memory
+
+    def start(self, build: Callable, args: tuple, local=None) -> _ClusterSession:
+        """The tasks of ``build(*args)``'s job on the workers (``local``, a job built here, is not used)."""
+        return _ClusterSession(self, build, tuple(self.ship(a) for a in args))
+
+    def ship(self, value):
+        """A scene made ready to travel (its files sent to the workers that lack them); other values as they are."""
+        from ..scene.model import Scene
+
+        if not isinstance(value, Scene):
+            return value
+        shipped = ShippedScene.of(value)
+        contents = {digest: path for path, digest in shipped.files.items()}
+        lacking = self.client.run(_lacking, sorted(contents))  # worker → the digests it has not got
+        for worker, digests in lacking.items():
+            if digests:
+                self.client.run(_keep_files, {d: Path(contents[d]).read_bytes() for d in digests}, workers=[worker])
+        return shipped
+
+    def close(self) -> None:
+        self.client.close()
+
+
+class _ClusterSession:
+    def __init__(self, cluster: Cluster, build: Callable, args: tuple):
+        self.cluster, self.build, self.args = cluster, build, args
+        self.token = uuid.uuid4().hex
+        self.futures: list = []
+
+    def __enter__(self) -> _ClusterSession:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.cluster.client.cancel(self.futures)  # an early stop, an error or Ctrl-C: nothing left running
+
+    def run(self, tasks: Sequence, sizes: Sequence[int], advance: Callable[[int], None]) -> Iterator[tuple[int, Any]]:
+        from distributed import as_completed
+        from distributed.scheduler import KilledWorker
+
+        client = self.cluster.client
+        futures = [client.submit(_cluster_task, self.token, self.build, self.args, task, pure=False,
+                                 key=f"reflets-{self.token}-{index}") for index, task in enumerate(tasks)]  # fmt: skip
+        self.futures += futures
+        index_of = {future.key: index for index, future in enumerate(futures)}
+        for future in as_completed(futures, loop=client.loop):
+            try:
+                result = future.result()
+            except KilledWorker:
+                raise RefletsError(f"task {index_of[future.key]} lost every worker it ran on: the workers' memory, "
+                                   "or their logs, say why", field=f"--cluster {self.cluster.address}") from None
+            index = index_of[future.key]
+            advance(sizes[index])
+            yield index, result
+
+
+# ----------------------------------------------------------------------------------------- on a worker
+_JOBS: dict[str, object] = {}
+
+
+def _cluster_task(token: str, build: Callable, args: tuple, task):
+    """A task on a worker: the run's job built on its first task there (the scene laid out from the files kept)."""
+    if token not in _JOBS:
+        while len(_JOBS) >= 2:  # a batch of scenes: the last two kept
+            _JOBS.pop(next(iter(_JOBS)))
+        _JOBS[token] = build(*(a.scene() if isinstance(a, ShippedScene) else a for a in args))
+    return _JOBS[token].task(task, _no_progress)
+
+
+def _no_progress(samples: int) -> None:
+    pass
+
+
+def _files_dir() -> Path:
+    return cache_dir("cluster") / "files"
+
+
+def _lacking(digests: list[str]) -> list[str]:
+    return [d for d in digests if not (_files_dir() / d).is_file()]
+
+
+def _keep_files(contents: dict[str, bytes]) -> None:
+    folder = _files_dir()
+    folder.mkdir(parents=True, exist_ok=True)
+    for digest, data in contents.items():
+        if hashlib.sha256(data).hexdigest() != digest:
+            raise RefletsError(f"a file sent to this worker does not match its digest {digest}")
+        writing = folder / f"{digest}.{uuid.uuid4().hex}.writing"  # workers of one machine share the folder
+        writing.write_bytes(data)
+        os.replace(writing, folder / digest)
+
+
+@dataclass(frozen=True)
+class ShippedScene:
+    """A scene as it travels: its description (file paths absolute, as on the machine it left) and the SHA-256 of
+    each file it reads."""
+
+    description: dict
+    files: dict[str, str]  # absolute path → SHA-256 of its content
+    key: str
+
+    @classmethod
+    def of(cls, scene) -> ShippedScene:
+        from ..cache import file_digest
+
+        description = _map_paths(scene.model_dump(), lambda p: scene.resolve(p).resolve())
+        files = {str(path): file_digest(path) for path in sorted(scene.input_files())}
+        return cls(description, files, content_key({"scene": repr(description), "files": files}))
+
+    def scene(self):
+        """The scene on this machine: its files laid out under a folder of its own, from the files kept."""
+        from ..scene.model import Scene
+
+        root = cache_dir("cluster") / "scenes" / self.key
+        if not root.is_dir():
+            building = root.with_name(f"{self.key}.{uuid.uuid4().hex}.building")
+            for path, digest in self.files.items():
+                kept = _files_dir() / digest
+                if not kept.is_file():
+                    raise RefletsError(f"the file {path} (SHA-256 {digest}) was not sent to this worker")
+                target = _under(building, Path(path))
+                target.parent.mkdir(parents=True, exist_ok=True)
+                try:
+                    os.link(kept, target)
+                except OSError:
+                    shutil.copyfile(kept, target)
+            building.mkdir(parents=True, exist_ok=True)
+            try:
+                os.rename(building, root)
+            except OSError:  # another worker of this machine laid it out first
+                shutil.rmtree(building, ignore_errors=True)
+        return Scene.model_validate(_map_paths(self.description, lambda p: _under(root, p)))
+
+
+def _under(root: Path, path: Path) -> Path:
+    return root / Path(path).relative_to(Path(path).anchor)
+
+
+def _map_paths(value, change: Callable[[Path], Path]):
+    """``value`` (a scene's model_dump) with every Path changed."""
+    if isinstance(value, Path):
+        return change(value)
+    if isinstance(value, dict):
+        return {k: _map_paths(v, change) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return type(value)(_map_paths(v, change) for v in value)
+    return value
