@@ -100,6 +100,7 @@ def test_info_names_renderer_and_methods(ctx, capsys):
     info = json.loads(out)
     assert code == 0
     assert info["opengl"]["renderer"] and "forward" in info["methods"]
+    assert info["cluster"]["engine"] == "dask.distributed" and info["cluster"]["version"]  # references on a cluster
 
 
 # ---------------------------------------------------------------- bad input: exit 2, one line, no output file

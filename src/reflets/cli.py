@@ -347,9 +347,6 @@ def cmd_reference(args) -> int:
     size = _size(args.size) if args.size else None
     if args.engine != "volumetric" and args.target_error is not None:
         raise ArgumentError("--target-error is the volumetric engine's (--engine volumetric)", field="--target-error")
-    if args.engine == "mitsuba" and args.cluster is not None:
-        raise ArgumentError("the Mitsuba engine runs in this process; a cluster runs the numpy and volumetric "
-                            "engines", field="--cluster")  # fmt: skip
     if args.workers is not None and args.workers < 1:
         raise ArgumentError(f"workers must be at least 1 (got {args.workers})", field="--workers")
     params = {"spp": args.spp, "seed": args.seed, "visibility": args.visibility, "pixel": args.pixel,
@@ -359,16 +356,18 @@ def cmd_reference(args) -> int:
                    overwrite=args.overwrite)  # fmt: skip
     if all(item.up_to_date for item in planned):
         place = None  # nothing to render: no cluster to reach
-    elif args.engine == "mitsuba":
-        place = places(1)
+    elif args.engine == "mitsuba" and args.cluster is None:
+        place = places(1)  # Mitsuba's own threads take every core
     else:
         place = places(args.workers, args.cluster)
+    # the Mitsuba bridge's crop windows go to a cluster named, never to this machine's processes
+    where = {"cluster": place} if args.engine == "mitsuba" and args.cluster is not None else {}
 
     def render(item):
         return reference(item.scene, spp=args.spp, seed=args.seed, engine=args.engine,
                          visibility=args.visibility == "on", size=size, pixel=args.pixel, heuristic=args.mis,
                          progress=not args.quiet, checkpoint=item.checkpoint, keep_checkpoint=True,
-                         target_error=args.target_error)  # fmt: skip
+                         target_error=args.target_error, **where)  # fmt: skip
 
     try:
         with using(place):  # the batch's references share it
@@ -430,6 +429,7 @@ def cmd_info(args) -> int:
         "flip-evaluator",
         "mitsuba",
         "opencv-python-headless",
+        "distributed",
     ]
     versions = {}
     for name in packages:
@@ -440,6 +440,8 @@ def cmd_info(args) -> int:
     from .renderer.compose import evaluation_table
 
     info = {"packages": versions, "methods": sorted(TECHNIQUES)}
+    # the engine behind `reflets reference --cluster` (reflets.reference.cluster)
+    info["cluster"] = {"engine": "dask.distributed", "version": versions["distributed"]}
     info["auto"] = [{"material": m, "light": light, "evaluation": how} for m, light, how in evaluation_table()]
     status = 0
     try:
@@ -458,6 +460,8 @@ def cmd_info(args) -> int:
         else:
             print(f"OpenGL    {gl['version']} — {gl['renderer']} ({gl['vendor']}), REFLETS_GL={gl['driver_choice']}")
         print("methods   " + ", ".join(info["methods"]))
+        print(f"cluster   references on a cluster through {info['cluster']['engine']} "
+              f"{info['cluster']['version'] or '(not installed)'}: reflets reference SCENE --cluster tcp://HOST:8786")
         print("auto      how the default method evaluates each material under each light:")
         for row in info["auto"]:
             print(f"          {row['material']:<17}{row['light']:<12}{row['evaluation']}")

@@ -123,3 +123,19 @@ def test_a_shipped_scene_is_laid_out_from_its_files_contents(tmp_path, monkeypat
     (mesh,) = there.input_files()
     assert str(mesh).startswith(str(tmp_path / "worker")) and mesh.read_bytes() == (tmp_path / "tri.obj").read_bytes()
     assert there.model_copy(update={"mesh": scene.mesh}) == scene.model_copy(update={"base_dir": None})
+
+
+def test_the_mitsuba_bridge_split_into_crop_windows_on_a_cluster(cluster, tmp_path):
+    """Mitsuba 3 renders the film in crop windows (each its own seed, from the size and seed alone): on the
+    cluster's workers the same image as in this process; a film of one window is the whole-film render of before."""
+    pytest.importorskip("mitsuba")
+    from reflets.reference.mitsuba_bridge import MITSUBA_TILE, mitsuba_tiles, render_mitsuba
+
+    scene = _mesh_scene(tmp_path)
+    size = (MITSUBA_TILE * 2 + 10, MITSUBA_TILE + 5)  # six windows, the last ones partial
+    assert len(mitsuba_tiles(*size, 3)) == 6 and mitsuba_tiles(16, 12, 3) == [((0, 0, 16, 12), 3)]
+    here = render_mitsuba(scene, spp=4, seed=3, size=size)
+    there = reflets.reference(scene, spp=4, seed=3, size=size, engine="mitsuba", cluster=cluster.scheduler_address,
+                              progress=False).image  # fmt: skip
+    np.testing.assert_array_equal(there, here)
+    assert here.max() > 0

@@ -34,6 +34,7 @@ SUITES: dict[str, str] = {
     "ar-loop": "reflets.bench.ar:bench_ar_loop",
     "soak": "reflets.bench.soak:bench_soak",
     "threads": "reflets.bench.threads:bench_threads",
+    "reference-scale": "reflets.bench.reference_scale:bench_reference_scale",
 }
 
 

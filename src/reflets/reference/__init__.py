@@ -71,9 +71,6 @@ def reference(
     check_spp(spp)  # a count the user gives is bounded (as render's), before any work
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ArgumentError(f"workers must be at least 1 (got {workers!r})", field="workers")
-    if engine == "mitsuba" and cluster is not None:
-        raise ArgumentError("the Mitsuba engine runs in this process; a cluster runs the numpy and volumetric "
-                            "engines", field="cluster")  # fmt: skip
     if engine != "volumetric" and (checkpoint is not None or target_error is not None):
         raise ArgumentError("checkpoints and a target error are the volumetric engine's (--engine volumetric)",
                             field="checkpoint" if checkpoint is not None else "target_error")  # fmt: skip
@@ -90,7 +87,7 @@ def reference(
         from .mitsuba_bridge import render_mitsuba
 
         start = time.perf_counter()
-        image = render_mitsuba(scene, spp=spp, seed=seed, size=size)
+        image = render_mitsuba(scene, spp=spp, seed=seed, size=size, cluster=cluster)
         import numpy as np
 
         return ReferenceResult(

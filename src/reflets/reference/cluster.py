@@ -29,6 +29,7 @@ from typing import Any
 
 from ..cache import cache_dir, content_key
 from ..errors import ArgumentError, RefletsError
+from ..resources import as_reference_worker
 
 #: seconds to reach the scheduler, then for a first worker to be there
 CONNECT_TIMEOUT_S = 10.0
@@ -182,6 +183,7 @@ _JOBS: dict[str, object] = {}
 def _cluster_task(token: str, build: Callable, args: tuple, task):
     """A task on a worker: the run's job built on its first task there (the scene laid out from the files kept)."""
     if token not in _JOBS:
+        as_reference_worker()
         while len(_JOBS) >= 2:  # a batch of scenes: the last two kept
             _JOBS.pop(next(iter(_JOBS)))
         _JOBS[token] = build(*(a.scene() if isinstance(a, ShippedScene) else a for a in args))

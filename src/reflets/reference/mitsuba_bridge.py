@@ -578,18 +578,66 @@ def _check_size(size) -> tuple[int, int]:
     return width, height
 
 
-def render_mitsuba(scene: Scene, spp: int = 64, seed: int = 0, size: tuple[int, int] | None = None) -> np.ndarray:
+#: the film is rendered in crop windows of at most this many pixels a side (reflets.reference.parallel's tasks)
+MITSUBA_TILE = 128
+
+
+def mitsuba_tiles(width: int, height: int, seed: int) -> list[tuple[tuple[int, int, int, int], int]]:
+    """The crop windows (x, y, w, h) of a film and each one's seed — from the size and the seed alone, so that the
+    image does not depend on where the tiles are rendered. One tile: the seed itself (the whole-film render of
+    before); several: each its own seed (SeedSequence of (seed, tile)), so that no two tiles share a pattern."""
+    windows = [(x, y, min(MITSUBA_TILE, width - x), min(MITSUBA_TILE, height - y))
+               for y in range(0, height, MITSUBA_TILE) for x in range(0, width, MITSUBA_TILE)]  # fmt: skip
+    if len(windows) == 1:
+        return [(windows[0], int(seed))]
+    return [(w, int(np.random.SeedSequence([int(seed), i]).generate_state(1)[0])) for i, w in enumerate(windows)]
+
+
+class MitsubaTiles:
+    """A scene loaded into Mitsuba once per process; its tasks render crop windows of the film."""
+
+    def __init__(self, scene: Scene, size, spp: int, seed: int):
+        mi = mitsuba_module()
+        self._files = tempfile.TemporaryDirectory(prefix="reflets-mitsuba-")  # the PLY / EXR files the scene reads
+        spec = to_mitsuba_dict(scene, Path(self._files.name), size=size, spp=spp, seed=seed, background="alpha")
+        self.sensor = spec["sensor"]
+        self.scene = mi.load_dict(spec)
+        self.spp = int(spp)
+        self.background = np.asarray(scene.background_color() or (0.0, 0.0, 0.0), dtype=np.float32)
+
+    def task(self, task, advance) -> np.ndarray:
+        """One crop window ((x, y, w, h), seed) → its (h, w, 3) pixels, the background composited."""
+        (x, y, w, h), seed = task
+        mi = mitsuba_module()
+        film = {**self.sensor["film"], "crop_offset_x": x, "crop_offset_y": y, "crop_width": w, "crop_height": h}
+        sensor = mi.load_dict({**self.sensor, "film": film, "sampler": {**self.sensor["sampler"], "seed": seed}})
+        image = np.array(mi.render(self.scene, sensor=sensor, spp=self.spp, seed=seed), dtype=np.float32)
+        if image.shape[-1] == 4:
+            image = image[..., :3] + (1.0 - image[..., 3:4]) * self.background
+        advance(1)
+        return np.ascontiguousarray(image[..., :3])
+
+
+def render_mitsuba(scene: Scene, spp: int = 64, seed: int = 0, size: tuple[int, int] | None = None,
+                   cluster=None) -> np.ndarray:  # fmt: skip
     """Render ``scene`` with Mitsuba 3 (``direct`` integrator, box pixel filter): float32 (H, W, 3), row 0 top.
 
-    A constant background colour is composited through the film's alpha (it is seen, it does not light).
+    A constant background colour is composited through the film's alpha (it is seen, it does not light). The film
+    is rendered in crop windows (:func:`mitsuba_tiles`) — in this process (Mitsuba's own threads take every core),
+    or on the workers of the Dask cluster ``cluster`` (reflets.reference.parallel): the same image either way.
     Raises :class:`MitsubaUnavailableError` without Mitsuba, :class:`SceneError` for unsupported materials.
     """
-    mi = mitsuba_module()
-    with tempfile.TemporaryDirectory(prefix="reflets-mitsuba-") as tmp:
-        spec = to_mitsuba_dict(scene, Path(tmp), size=size, spp=spp, seed=seed, background="alpha")
-        mi_scene = mi.load_dict(spec)
-        image = np.array(mi.render(mi_scene, spp=int(spp), seed=int(seed)), dtype=np.float32)
-    if image.shape[-1] == 4:
-        color = np.asarray(scene.background_color(), dtype=np.float32)
-        image = image[..., :3] + (1.0 - image[..., 3:4]) * color
-    return np.ascontiguousarray(image[..., :3], dtype=np.float32)
+    from .parallel import places
+
+    width, height = _check_size(size or scene.camera.size)
+    tasks = mitsuba_tiles(width, height, seed)
+    image = np.zeros((height, width, 3), np.float32)
+    place = places(1 if cluster is None else None, cluster)
+    try:
+        with place.start(MitsubaTiles, (scene, (width, height), spp, seed)) as tiles:
+            for index, tile in tiles.run(tasks, [1] * len(tasks), lambda k: None):
+                x, y, w, h = tasks[index][0]
+                image[y : y + h, x : x + w] = tile
+    finally:
+        place.close()
+    return image

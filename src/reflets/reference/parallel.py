@@ -26,6 +26,7 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from ..errors import ArgumentError
+from ..resources import as_reference_worker
 
 #: the job a local worker process built when it started
 _WORKER_JOB = None
@@ -78,6 +79,7 @@ class LocalProcesses:
 
 def _init_worker(build: Callable, args: tuple) -> None:
     global _WORKER_JOB
+    as_reference_worker()
     _WORKER_JOB = build(*args)
 
 
