@@ -56,6 +56,27 @@ def test_references_on_a_cluster_equal_one_process_bit_for_bit(cluster, tmp_path
     np.testing.assert_array_equal(remote.stderr, one.stderr)
 
 
+def test_a_translucent_reference_in_tiles_of_pixels(cluster, monkeypatch):
+    """The volumetric engine's blocks of samples split into tiles of the object's pixels (a large image: many
+    tasks for a cluster): 1 process, 2 processes and the cluster give one image bit for bit; a single tile is the
+    untiled image of before, several another estimate of it (other streams, within the standard errors)."""
+    from reflets.reference import volumetric
+
+    translucent = reflets.load_dict(TRANSLUCENT)
+    untiled = volumetric.render_volumetric(translucent, spp=8, seed=3, progress=False)
+    monkeypatch.setattr(volumetric, "VOLUMETRIC_TILE_PIXELS", 40)  # the tiles are made here, sent with the tasks
+    assert len(volumetric.pixel_tiles(int(untiled.mask.sum()))) >= 3
+    one = volumetric.render_volumetric(translucent, spp=8, seed=3, progress=False)
+    for where in ({"workers": 2}, {"cluster": cluster.scheduler_address}):
+        other = volumetric.render_volumetric(translucent, spp=8, seed=3, progress=False, **where)
+        np.testing.assert_array_equal(other.image, one.image)
+        np.testing.assert_array_equal(other.stderr, one.stderr)
+    m = one.mask
+    assert not np.array_equal(one.image, untiled.image)
+    z = (one.image[m] - untiled.image[m]) / np.sqrt(one.stderr[m] ** 2 + untiled.stderr[m] ** 2 + 1e-30)
+    assert abs(float(np.mean(z))) < 0.2 and float(np.mean(np.abs(z))) < 1.2
+
+
 def test_a_worker_killed_during_the_run_has_its_tasks_run_again(cluster, tmp_path):
     """Twelve tiles; one worker process killed (SIGKILL) as the first tile comes back: Dask's nanny starts a new
     one, the lost tiles run again, and every tile equals the one drawn in this process."""

@@ -146,7 +146,7 @@ class MonteCarloReference:
             _check_adaptive(adaptive_error, adaptive_spp, spp)
         width, height = size or self.scene.camera.size
         n_pixels = width * height
-        place = places(workers, cluster)
+        place = places(None if cluster is not None else workers, cluster)  # workers: this machine's (not a cluster's)
         chunks = place.processes * REFERENCE_CHUNK_BYTES  # each process of this machine holds a chunk of rays
         try:
             check(

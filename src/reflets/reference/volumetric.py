@@ -335,21 +335,21 @@ def render_volumetric(
     if target_error is not None and (isinstance(target_error, bool) or not isinstance(target_error, numbers.Real)
                                      or not 0 < target_error < 1):  # fmt: skip
         raise ArgumentError(f"must be a number in (0, 1), got {target_error!r}", field="target_error")
-    place = places(workers, cluster)
+    place = places(None if cluster is not None else workers, cluster)  # workers: this machine's (not a cluster's)
     try:
         _check_memory(scene, place.processes, refract)
         job = _VolumetricJob(scene, refract, orders)
         blocks = sample_blocks(spp, len(job.pix))
-        seeds = np.random.SeedSequence(seed).spawn(len(blocks))
+        tiles = pixel_tiles(len(job.pix))
         partial = None
         if checkpoint is not None:
             key = reference_key(scene, engine="volumetric", sampling=SAMPLING_VERSION, spp=spp, seed=seed,
-                                refract=refract, orders=orders, blocks=blocks)  # fmt: skip
+                                refract=refract, orders=orders, blocks=blocks, tiles=tiles)  # fmt: skip
             partial = PartialSums(checkpoint, key)
         # an albedo map: the light leaving the medium towards the camera × its texel where it leaves (the camera hit)
         tint = job.material.tint(job.geometry.uv_sets(job.hits.prim[job.pix], job.hits.u[job.pix],
                                                       job.hits.v[job.pix]))  # fmt: skip
-        runner = _BlockRunner(job, blocks, seeds, tint, partial, target_error)
+        runner = _BlockRunner(job, blocks, tiles, seed, tint, partial, target_error)
         runner.run(place, (scene, refract, orders), progress)
     finally:
         place.close()
@@ -405,21 +405,25 @@ class _VolumetricJob:
         self.label = "volumetric reference" + (" (refracting boundary)" if self.refracting else "")
 
     def task(self, task, advance) -> tuple[np.ndarray, np.ndarray]:
-        """A block of samples (reflets.reference.parallel): (spp, its SeedSequence) → its sums."""
-        spp, seed = task
-        return self.sums(spp, np.random.default_rng(seed), advance)
+        """A block of samples over a tile of the object's pixels (reflets.reference.parallel): (spp, its
+        SeedSequence, (first, stop) object pixels) → its sums."""
+        spp, seed, tile = task
+        return self.sums(spp, np.random.default_rng(seed), advance, slice(*tile))
 
-    def sums(self, spp: int, rng, advance) -> tuple[np.ndarray, np.ndarray]:
-        """Per-pixel Σ and Σ² over ``spp`` samples (P, 3); ``advance(k)`` after every k samples done."""
+    def sums(self, spp: int, rng, advance, tile: slice = slice(None)) -> tuple[np.ndarray, np.ndarray]:
+        """Per-pixel Σ and Σ² over ``spp`` samples (P, 3) of the object's pixels ``tile``; ``advance(k)`` after
+        every k samples done."""
+        pix = self.pix[tile]
         if self.refracting:
             return _render_refracting(
-                self.geometry, self.medium, self.scale, self.source, self.dirs[self.pix], self.hits, self.pix,
+                self.geometry, self.medium, self.scale, self.source, self.dirs[pix], self.hits, pix,
                 spp, rng, self.orders, advance,
             )  # fmt: skip
-        return self._sums_index_matched(spp, rng, advance)
+        return self._sums_index_matched(spp, rng, advance, tile)
 
-    def _sums_index_matched(self, spp, rng, advance):
-        geometry, medium, source, pix, orders = self.geometry, self.medium, self.source, self.pix, self.orders
+    def _sums_index_matched(self, spp, rng, advance, tile: slice):
+        geometry, medium, source, orders = self.geometry, self.medium, self.source, self.orders
+        pix, entry = self.pix[tile], self.entry[tile]
         dirs = self.dirs
         total = np.zeros((len(pix), 3))
         total2 = np.zeros((len(pix), 3))
@@ -429,7 +433,7 @@ class _VolumetricJob:
                 sigma_t = float(medium.sigma_t[c]) * self.scale
                 albedo = float(medium.albedo[c])
                 n = len(pix)
-                pos = self.entry + dirs[pix] * geometry.epsilon
+                pos = entry + dirs[pix] * geometry.epsilon
                 d = dirs[pix].copy()
                 wgt = np.ones(n)
                 acc = np.zeros(n)
@@ -481,8 +485,23 @@ def mean_and_variance(total, total2, n: int, tint) -> tuple[np.ndarray, np.ndarr
     return mean * tint, var * tint**2
 
 
-#: how the samples are drawn (blocks, their seeds): a checkpoint of another version is not resumed (bump on a change)
-SAMPLING_VERSION = 2
+#: how the samples are drawn (blocks, tiles, their seeds): a checkpoint of another version is not resumed (bump on a
+#: change)
+SAMPLING_VERSION = 3
+#: the object's pixels a task walks at most: a block of samples is split into tiles of pixels, so that a large image
+#: makes many tasks (a cluster's workers share them) of bounded memory
+VOLUMETRIC_TILE_PIXELS = 16_384
+
+
+def pixel_tiles(pixels: int) -> list[tuple[int, int]]:
+    """The tiles (first, stop) of the object's ``pixels``: VOLUMETRIC_TILE_PIXELS each, the last one shorter."""
+    return [(a, min(a + VOLUMETRIC_TILE_PIXELS, pixels)) for a in range(0, pixels, VOLUMETRIC_TILE_PIXELS)] or [(0, 0)]
+
+
+def task_seed(seed: int, block: int, tile: int, tiles: int) -> np.random.SeedSequence:
+    """The random stream of a block's tile: the block's child of ``seed``'s SeedSequence, and that child's child
+    per tile when there are several (one tile: the block's stream itself, as before tiles)."""
+    return np.random.SeedSequence(seed, spawn_key=(block,) if tiles == 1 else (block, tile))
 
 
 def sample_blocks(spp: int, pixels: int) -> list[int]:
@@ -500,8 +519,9 @@ class _BlockRunner:
     caller removes it once the images are safe), stops at a target error, and shows the samples done, the time left
     and the current error."""
 
-    def __init__(self, job, blocks: list[int], seeds, tint, partial: PartialSums | None, target: float | None):
-        self.job, self.blocks, self.seeds, self.tint = job, blocks, seeds, tint
+    def __init__(self, job, blocks: list[int], tiles: list[tuple[int, int]], seed: int, tint,
+                 partial: PartialSums | None, target: float | None):  # fmt: skip
+        self.job, self.blocks, self.tiles, self.seed, self.tint = job, blocks, tiles, seed, tint
         self.partial, self.target = partial, target
         self.next_block, self.total, self.total2 = partial.load() if partial is not None else (0, 0.0, 0.0)
         if self.next_block > len(blocks):
@@ -540,19 +560,29 @@ class _BlockRunner:
         todo = self.blocks[first:]
         if not todo or (self.target is not None and self.error() <= self.target):
             return  # the checkpoint of a finished run
-        columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
+        columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed:.0f}/{task.total} spp"),
                    TimeRemainingColumn(), TextColumn("{task.fields[error]}"))  # fmt: skip
         # the time left from the whole run's pace (blocks of a large image take minutes: rich's default 30 s window
         # would hold one)
         with Progress(*columns, disable=not progress, transient=True, speed_estimate_period=24 * 3600) as bar:
             task = bar.add_task(self.job.label + place.label, total=sum(self.blocks), completed=self.samples,
                                 error="")  # fmt: skip
-            tasks = [(spp, self.seeds[first + i]) for i, spp in enumerate(todo)]
+            n = len(self.tiles)  # each block's tiles, in order: the progress counts samples of the whole image
+            tasks = [(spp, task_seed(self.seed, first + i, t, n), tile)
+                     for i, spp in enumerate(todo) for t, tile in enumerate(self.tiles)]  # fmt: skip
             try:
                 with place.start(_VolumetricJob, build_args, local=self.job) as session:
-                    results = session.run(tasks, todo, lambda k: bar.advance(task, k))
-                    for _, (t, t2) in ordered(results):
-                        done = self._add(t, t2)
+                    sizes = [spp / n for spp, _, _ in tasks]
+                    results = session.run(tasks, sizes, lambda k: bar.advance(task, k / n))
+                    pixels = len(self.job.pix)
+                    for index, (t, t2) in ordered(results):
+                        if index % n == 0:
+                            block_t, block_t2 = np.zeros((pixels, 3)), np.zeros((pixels, 3))
+                        a, b = self.tiles[index % n]
+                        block_t[a:b], block_t2[a:b] = t, t2
+                        if index % n < n - 1:
+                            continue
+                        done = self._add(block_t, block_t2)  # a whole block: added as before tiles
                         bar.update(task, error=f"σ/μ {self.error():.3g}")
                         if done:
                             break
