@@ -349,6 +349,10 @@ def cmd_reference(args) -> int:
         raise ArgumentError("--target-error is the volumetric engine's (--engine volumetric)", field="--target-error")
     if args.workers is not None and args.workers < 1:
         raise ArgumentError(f"workers must be at least 1 (got {args.workers})", field="--workers")
+    if args.cluster is not None:
+        from .reference.cluster import check_address
+
+        check_address(args.cluster)
     params = {"spp": args.spp, "seed": args.seed, "visibility": args.visibility, "pixel": args.pixel,
               "heuristic": args.mis, "size": size, "target_error": args.target_error}  # fmt: skip
     planned = plan(args.scene, args.output, lambda path: load_scene(path, camera=args.camera,

@@ -47,7 +47,13 @@ def test_references_on_a_cluster_equal_one_process_bit_for_bit(cluster, tmp_path
     np.testing.assert_array_equal(remote.stderr, one.stderr)
     assert one.image.max() > 0
     digest = hashlib.sha256((tmp_path / "tri.obj").read_bytes()).hexdigest()
-    assert (cluster.cache / "reflets" / "cluster" / "files" / digest).is_file()  # shipped by its content
+    assert (cluster.cache / "reflets" / "cluster" / "files" / digest).is_file()  # fetched by its content
+    # adaptive rounds: a session's second run of tasks (new task keys), the refined pixels the same
+    one = reflets.reference(scene, spp=16, workers=1, progress=False, adaptive_error=0.05, adaptive_spp=64)
+    remote = reflets.reference(scene, spp=16, cluster=address, progress=False, adaptive_error=0.05, adaptive_spp=64)
+    assert one.pixel_spp.max() == 64
+    np.testing.assert_array_equal(remote.image, one.image)
+    np.testing.assert_array_equal(remote.pixel_spp, one.pixel_spp)
 
     translucent = reflets.load_dict(TRANSLUCENT)
     one = reflets.reference(translucent, spp=16, seed=3, engine="volumetric", workers=1, progress=False)
@@ -139,7 +145,7 @@ def test_a_shipped_scene_is_laid_out_from_its_files_contents(tmp_path, monkeypat
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "worker"))
     with pytest.raises(reflets.errors.RefletsError, match="was not sent to this worker"):
         shipped.scene()
-    clusters._keep_files({d: open(p, "rb").read() for p, d in shipped.files.items()})
+    clusters._keep_files({d: open(p, "rb").read() for p, d in shipped.files.items()})  # as a task keeps them
     there = shipped.scene()
     (mesh,) = there.input_files()
     assert str(mesh).startswith(str(tmp_path / "worker")) and mesh.read_bytes() == (tmp_path / "tri.obj").read_bytes()

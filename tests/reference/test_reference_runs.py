@@ -133,8 +133,6 @@ def test_the_cli_keeps_an_interrupted_run_s_partial_sums(tmp_path, capsys):
 def test_every_core_by_default(monkeypatch):
     """``reflets.reference`` without ``workers`` shares the work among every core (its engines get no count: the
     place is chosen by reflets.reference.parallel.places), or the place of an enclosing ``using`` block."""
-    import os
-
     from reflets.reference import parallel
 
     seen = {}
@@ -144,7 +142,7 @@ def test_every_core_by_default(monkeypatch):
         raise StopIteration
 
     monkeypatch.setattr(volumetric, "render_volumetric", fake)
-    monkeypatch.setattr(os, "cpu_count", lambda: 7)
+    monkeypatch.setattr(parallel, "cores", lambda: 7)
     with pytest.raises(StopIteration):
         reflets.reference(reflets.load_dict(SCENE), engine="volumetric", spp=2, progress=False)
     assert seen["workers"] is None and seen["cluster"] is None
@@ -153,6 +151,9 @@ def test_every_core_by_default(monkeypatch):
         assert parallel.places().processes == 3
     with pytest.raises(ArgumentError, match="not both"):
         parallel.places(2, "tcp://127.0.0.1:8786")
+    for bad in (0, -3, 2.5, True):
+        with pytest.raises(ArgumentError, match="at least 1"):
+            parallel.places(bad)
     with pytest.raises(ArgumentError, match="at least 1"):
         reflets.reference(reflets.load_dict(SCENE), engine="volumetric", workers=0)
 

@@ -17,13 +17,13 @@ most R × t workers busy with tasks of t seconds, and a reference of n tasks at 
 from __future__ import annotations
 
 import logging
-import os
 import statistics
 import time
 
 import numpy as np
 
 from ..reference.parallel import InProcess, LocalProcesses, places
+from ..reference.parallel import cores as parallel_cores
 
 #: machines × cores of the stated projection
 PROJECTED_WORKERS = 100 * 16
@@ -83,17 +83,18 @@ def bench_reference_scale(quick: bool, out_dir) -> tuple[dict, str]:
     from distributed import LocalCluster
 
     from ..reference import reference
-    from ..reference.cluster import Cluster, connect, engine_version
-    from ..reference.parallel import _DEFAULT
+    from ..reference.cluster import connect, engine_version
+    from ..reference.parallel import default_cluster
 
     runs = 1 if quick else 3
-    cores = os.cpu_count() or 1
+    cores = parallel_cores()
     counts = sorted({1, 2, cores})
     start = time.perf_counter()
     local = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                          dashboard_address=None, silence_logs=logging.ERROR)  # fmt: skip
     cluster_start_s = time.perf_counter() - start
-    given = _DEFAULT.get() if isinstance(_DEFAULT.get(), Cluster) else None  # `reflets bench --cluster`
+    given = default_cluster()  # `reflets bench --cluster`
+    dask_local = None
     try:
         dask_local = connect(local.scheduler_address)
         places_run = [(f"{n} process{'es' if n > 1 else ''}", n, places(n)) for n in counts]
@@ -124,7 +125,8 @@ def bench_reference_scale(quick: bool, out_dir) -> tuple[dict, str]:
         overheads = {label: _overhead(place, 100 if quick else 400) for label, _, place in places_run
                      if not isinstance(place, InProcess)}  # fmt: skip
     finally:
-        dask_local.close()
+        if dask_local is not None:
+            dask_local.close()
         local.close()
     results = {"cluster_engine": f"dask.distributed {engine_version()}", "cores": cores,
                "local_cluster_start_s": cluster_start_s, "rows": rows, "overhead": overheads,
@@ -145,7 +147,7 @@ def _projection(rows: list[dict], dask: dict) -> list[dict]:
     out (tasks / s × a task's seconds)."""
     out = []
     for row in rows:
-        if row["workers"] != 1:
+        if row["place"] != "1 process":
             continue
         task_s = row["seconds"] / row["tasks"]
         driver_bound = dask["tasks_per_s"] * task_s

@@ -49,7 +49,7 @@ def reference(
         ``translucent`` technique's single + multiple scattering, reflets.reference.volumetric; pixel centres, with
         shadows)
     workers : processes of this machine sharing the work (numpy and volumetric engines: the same image for any
-        number; default every core of this machine, ``os.cpu_count()``, or the place of an enclosing
+        number; default every core this process may use, or the place of an enclosing
         ``reflets.reference.parallel.using`` block)
     cluster : the address of a Dask scheduler (``tcp://HOST:8786``), or a connected
         reflets.reference.cluster.Cluster, whose workers share the work instead (the scene and its files travel by

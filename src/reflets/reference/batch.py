@@ -56,35 +56,46 @@ def plan(sources: list[str], output: str | None, load: Callable, *, engine: str,
     planned: list[Planned] = []
     for source in sources:
         scene = load(source)
-        if batch:
-            out = folder / (Path(source).stem + ".exr")
-        else:
-            out = folder or Path(Path(source).stem + ".ref.exr")
-        check_output_path(out, (".exr", ".npy"))
-        stderr = out.with_name(out.stem + ".stderr" + out.suffix)
-        inputs = scene.input_files() | {Path(source)}
-        for path in (out, stderr):
-            check_not_input(path, inputs)
-        clash = next((p for p in planned if p.out.resolve() == out.resolve()), None)
-        if clash is not None:
-            raise ArgumentError(f"{clash.source} and {source} would both be written to {out}: give the scenes "
-                                "different names", field="scene")  # fmt: skip
-        item = Planned(Path(source), scene, out, stderr, _checkpoint(out, engine, resume, batch))
-        if batch:
-            from .store import fingerprint
+        if engine == "volumetric":  # what the engine cannot render, said before any image is written
+            from .volumetric import _check_volumetric_scene
 
-            item.key = fingerprint(scene, engine=engine, **params)[0]
+            _check_volumetric_scene(scene)
+        out = folder / (Path(source).stem + ".exr") if batch else folder or Path(Path(source).stem + ".ref.exr")
+        check_output_path(out, (".exr", ".npy"))
+        item = Planned(Path(source), scene, out, out.with_name(out.stem + ".stderr" + out.suffix),
+                       _checkpoint(out, engine, resume, batch))  # fmt: skip
+        for other in planned:
+            if {item.out.resolve(), item.stderr.resolve()} & {other.out.resolve(), other.stderr.resolve()}:
+                raise ArgumentError(f"{other.source} and {source} would both be written to {out.parent} as "
+                                    f"{out.name} or {item.stderr.name}: give the scenes different names",
+                                    field="scene")  # fmt: skip
+        if batch:
+            item.key = _content_key(scene, engine, params)
             entry = index.get(out.name, {})
-            made = out.exists() and (engine == "mitsuba" or stderr.exists())
+            made = out.exists() and (engine == "mitsuba" or item.stderr.exists())
             item.up_to_date = made and entry.get("key") == item.key
             if not item.up_to_date and not overwrite:
-                for path in (out, stderr):
+                for path in (out, item.stderr):
                     if path.exists():
                         raise OutputError(f"exists and {folder / INDEX} does not say it was made from this scene "
                                           "and these parameters: --overwrite to replace it, or write elsewhere",
                                           file=path)  # fmt: skip
         planned.append(item)
+    inputs = set().union(*(item.scene.input_files() | {item.source} for item in planned))
+    for item in planned:  # no output replaces a file that any of the scenes reads
+        for path in (item.out, item.stderr):
+            check_not_input(path, inputs)
     return planned
+
+
+def _content_key(scene, engine: str, params: dict) -> str:
+    """What a batch's image was made from: the reference store's fingerprint (the scene, its meshes' and textures'
+    contents, the parameters) and the contents of every other file the scene reads (maps, masks, measured BRDFs)."""
+    from ..cache import file_digest
+    from .store import fingerprint
+
+    files = {str(path): file_digest(path) for path in sorted(scene.input_files())}
+    return fingerprint(scene, engine=engine, files=sorted(files.values()), **params)[0]
 
 
 def _checkpoint(out: Path, engine: str, resume: bool, batch: bool) -> Path | None:
@@ -126,6 +137,10 @@ def make(planned: list[Planned], render: Callable[[Planned], object], say: Calla
         if item.up_to_date:
             say(f"kept {item.out}: up to date (same scene, files and parameters)")
             continue
+        index_path = item.out.parent / INDEX
+        if item.key is not None and item.out.name in (index := _read_index(index_path)):
+            del index[item.out.name]  # replaced: the entry goes first, so that a kill never leaves it vouching
+            write(index_path, index, indent=2)
         result = render(item)
         write_image(item.out, result.image)
         if result.engine != "mitsuba":
@@ -133,7 +148,6 @@ def make(planned: list[Planned], render: Callable[[Planned], object], say: Calla
         if item.checkpoint is not None:  # the images are safe: the partial sums go
             PartialSums(item.checkpoint, "").remove()
         if item.key is not None:
-            index_path = item.out.parent / INDEX
             index = _read_index(index_path)
             index[item.out.name] = {"key": item.key, "scene": str(item.source), "engine": result.engine,
                                     "spp": result.spp, "seconds": round(result.seconds, 3)}  # fmt: skip

@@ -17,10 +17,13 @@ but the scheduler's address:
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import hashlib
 import os
 import shutil
 import sys
+import threading
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -35,7 +38,7 @@ from ..resources import as_reference_worker
 CONNECT_TIMEOUT_S = 10.0
 WORKER_TIMEOUT_S = 30.0
 #: the packages whose versions must match between this process and every worker
-MATCHED = ("reflets", "numpy", "distributed", "cloudpickle")
+MATCHED = ("reflets", "numpy", "scipy", "embreex", "trimesh", "mitsuba", "distributed", "cloudpickle")
 
 
 def engine_version() -> str | None:
@@ -67,17 +70,13 @@ def check_versions(address: str, here: dict[str, str], workers: dict[str, dict[s
         wrong = [f"{name} {theirs.get(name)} (here {mine})" for name, mine in here.items() if theirs.get(name) != mine]
         if wrong:
             raise ArgumentError(f"worker {worker} runs {', '.join(wrong)}: install the same versions on every "
-                                "machine", field=f"--cluster {address}")  # fmt: skip
+                                "machine", field=f"--cluster {address}".strip())  # fmt: skip
 
 
-def connect(address: str) -> Cluster:
-    """A Dask scheduler at ``address`` (``tcp://HOST:PORT``) with at least one worker whose versions match:
-    or one line, exit 2 — a malformed address, a scheduler that does not answer within CONNECT_TIMEOUT_S, no
-    worker within WORKER_TIMEOUT_S, a worker without reflets or with other versions."""
-    import distributed
+def check_address(address) -> None:
+    """A scheduler's address, ``tcp://HOST:PORT`` (checked before any work: a typo fails at once)."""
     from distributed.comm import parse_address
 
-    where = f"--cluster {address}"
     if not isinstance(address, str) or not address.strip():
         raise ArgumentError("an address is needed, like tcp://HOST:8786", field="--cluster")
     try:
@@ -86,8 +85,18 @@ def connect(address: str) -> Cluster:
         if scheme != "tcp" or not host or not port.isdigit() or not 0 < int(port) < 65536:
             raise ValueError(location)
     except ValueError:
-        raise ArgumentError("not a scheduler address; expected tcp://HOST:PORT (a Dask scheduler, "
-                            "`dask scheduler` prints it)", field=where) from None  # fmt: skip
+        raise ArgumentError("not a scheduler address; expected tcp://HOST:PORT (a Dask scheduler's, as `dask "
+                            "scheduler` prints it; tcp only)", field=f"--cluster {address}") from None  # fmt: skip
+
+
+def connect(address: str) -> Cluster:
+    """A Dask scheduler at ``address`` (``tcp://HOST:PORT``) with at least one worker whose versions match:
+    or one line, exit 2 — a malformed address, a scheduler that does not answer within CONNECT_TIMEOUT_S, no
+    worker within WORKER_TIMEOUT_S, a worker without reflets or with other versions."""
+    import distributed
+
+    check_address(address)
+    where = f"--cluster {address}"
     try:
         client = distributed.Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
     except (OSError, TimeoutError) as exc:
@@ -124,70 +133,114 @@ class Cluster:
 
     def start(self, build: Callable, args: tuple, local=None) -> _ClusterSession:
         """The tasks of ``build(*args)``'s job on the workers (``local``, a job built here, is not used)."""
-        return _ClusterSession(self, build, tuple(self.ship(a) for a in args))
-
-    def ship(self, value):
-        """A scene made ready to travel (its files sent to the workers that lack them); other values as they are."""
-        from ..scene.model import Scene
-
-        if not isinstance(value, Scene):
-            return value
-        shipped = ShippedScene.of(value)
-        contents = {digest: path for path, digest in shipped.files.items()}
-        lacking = self.client.run(_lacking, sorted(contents))  # worker → the digests it has not got
-        for worker, digests in lacking.items():
-            if digests:
-                self.client.run(_keep_files, {d: Path(contents[d]).read_bytes() for d in digests}, workers=[worker])
-        return shipped
+        session = _ClusterSession(self, build)
+        session.args = tuple(session.ship(a) for a in args)
+        return session
 
     def close(self) -> None:
         self.client.close()
 
 
 class _ClusterSession:
-    def __init__(self, cluster: Cluster, build: Callable, args: tuple):
-        self.cluster, self.build, self.args = cluster, build, args
+    def __init__(self, cluster: Cluster, build: Callable):
+        self.cluster, self.build, self.args = cluster, build, ()
         self.token = uuid.uuid4().hex
-        self.futures: list = []
+        self.runs = 0
+        self.pending: set = set()
+        self.files: dict = {}  # SHA-256 → the file's bytes scattered on the cluster (a dependency of every task)
 
     def __enter__(self) -> _ClusterSession:
         return self
 
     def __exit__(self, *exc) -> None:
-        self.cluster.client.cancel(self.futures)  # an early stop, an error or Ctrl-C: nothing left running
+        try:  # an early stop, an error or Ctrl-C: nothing left running
+            self.cluster.client.cancel(list(self.pending) + list(self.files.values()))
+        except Exception:  # noqa: BLE001 — a lost connection: nothing to cancel, and the first error is the one to say
+            pass
+
+    def ship(self, value):
+        """A scene made ready to travel: its files' contents put on the cluster once, a dependency of every task
+        (Dask brings them to whichever worker runs one — a new machine, a worker that joined later —, which keeps
+        on its disk those it lacked); other values as they are."""
+        from ..scene.model import Scene
+
+        if not isinstance(value, Scene):
+            return value
+        shipped = ShippedScene.of(value)
+        contents = {}
+        for path, digest in shipped.files.items():
+            data = Path(path).read_bytes()
+            if hashlib.sha256(data).hexdigest() != digest:
+                raise RefletsError("changed while the reference was being sent to the cluster: run it again",
+                                   file=path)  # fmt: skip
+            contents[digest] = data
+        new = sorted(set(contents) - set(self.files))
+        if new:
+            with self._said():
+                futures = self.cluster.client.scatter([contents[d] for d in new], hash=False)
+            self.files.update(zip(new, futures, strict=True))
+        return shipped
 
     def run(self, tasks: Sequence, sizes: Sequence[int], advance: Callable[[int], None]) -> Iterator[tuple[int, Any]]:
         from distributed import as_completed
         from distributed.scheduler import KilledWorker
 
-        client = self.cluster.client
-        futures = [client.submit(_cluster_task, self.token, self.build, self.args, task, pure=False,
-                                 key=f"reflets-{self.token}-{index}") for index, task in enumerate(tasks)]  # fmt: skip
-        self.futures += futures
+        client, here = self.cluster.client, versions()
+        self.runs += 1  # a session's runs (adaptive rounds) never share a task's key
+        with self._said():
+            futures = [client.submit(_cluster_task, self.token, self.build, self.args, task, here, self.files,
+                                     pure=False, key=f"reflets-{self.token}-{self.runs}-{index}")
+                       for index, task in enumerate(tasks)]  # fmt: skip
+        self.pending.update(futures)
         index_of = {future.key: index for index, future in enumerate(futures)}
         for future in as_completed(futures, loop=client.loop):
-            try:
-                result = future.result()
-            except KilledWorker:
-                raise RefletsError(f"task {index_of[future.key]} lost every worker it ran on: the workers' memory, "
-                                   "or their logs, say why", field=f"--cluster {self.cluster.address}") from None
             index = index_of[future.key]
+            try:
+                with self._said():
+                    result = future.result()
+            except KilledWorker:
+                raise RefletsError(f"task {index} lost every worker it ran on: the workers' memory, or their logs, "
+                                   "say why", field=f"--cluster {self.cluster.address}") from None  # fmt: skip
+            self.pending.discard(future)  # its result is released on the workers once yielded
             advance(sizes[index])
             yield index, result
+
+    @contextlib.contextmanager
+    def _said(self):
+        """The cluster's own failures (a lost connection, a scheduler gone, cancelled tasks) in one line."""
+        from distributed.client import FutureCancelledError
+        from distributed.comm import CommClosedError
+
+        try:
+            yield
+        except (CommClosedError, FutureCancelledError, OSError, asyncio.CancelledError) as exc:
+            raise RefletsError(f"the cluster stopped answering ({type(exc).__name__}: {exc})",
+                               field=f"--cluster {self.cluster.address}") from None  # fmt: skip
 
 
 # ----------------------------------------------------------------------------------------- on a worker
 _JOBS: dict[str, object] = {}
+_JOBS_LOCK = threading.Lock()  # a worker with several threads builds a run's job once
 
 
-def _cluster_task(token: str, build: Callable, args: tuple, task):
-    """A task on a worker: the run's job built on its first task there (the scene laid out from the files kept)."""
-    if token not in _JOBS:
-        as_reference_worker()
-        while len(_JOBS) >= 2:  # a batch of scenes: the last two kept
-            _JOBS.pop(next(iter(_JOBS)))
-        _JOBS[token] = build(*(a.scene() if isinstance(a, ShippedScene) else a for a in args))
-    return _JOBS[token].task(task, _no_progress)
+def _cluster_task(token: str, build: Callable, args: tuple, task, expected: dict[str, str], files: dict[str, bytes]):
+    """A task on a worker: the run's job built on its first task there (this worker's versions checked against
+    the driver's — a worker that joined after the start was never asked —, the files it lacked kept on its disk,
+    the scene laid out from them)."""
+    with _JOBS_LOCK:
+        if token not in _JOBS:
+            as_reference_worker()
+            mine = versions()
+            if mine != expected:
+                from distributed import get_worker
+
+                check_versions("", expected, {get_worker().address: mine})
+            _keep_files({d: data for d, data in files.items() if not (_files_dir() / d).is_file()})
+            while len(_JOBS) >= 2:  # a batch of scenes: the last two kept
+                _JOBS.pop(next(iter(_JOBS)))
+            _JOBS[token] = build(*(a.scene() if isinstance(a, ShippedScene) else a for a in args))
+        job = _JOBS[token]
+    return job.task(task, _no_progress)
 
 
 def _no_progress(samples: int) -> None:
@@ -196,10 +249,6 @@ def _no_progress(samples: int) -> None:
 
 def _files_dir() -> Path:
     return cache_dir("cluster") / "files"
-
-
-def _lacking(digests: list[str]) -> list[str]:
-    return [d for d in digests if not (_files_dir() / d).is_file()]
 
 
 def _keep_files(contents: dict[str, bytes]) -> None:

@@ -624,14 +624,18 @@ def render_mitsuba(scene: Scene, spp: int = 64, seed: int = 0, size: tuple[int, 
 
     A constant background colour is composited through the film's alpha (it is seen, it does not light). The film
     is rendered in crop windows (:func:`mitsuba_tiles`) — in this process (Mitsuba's own threads take every core),
-    or on the workers of the Dask cluster ``cluster`` (reflets.reference.parallel): the same image either way.
+    or on the workers of the Dask cluster ``cluster`` (or of an enclosing reflets.reference.parallel.using block):
+    the same image either way.
     Raises :class:`MitsubaUnavailableError` without Mitsuba, :class:`SceneError` for unsupported materials.
     """
-    from .parallel import places
+    from .parallel import default_cluster, places
 
     width, height = _check_size(size or scene.camera.size)
+    if not (isinstance(seed, int | np.integer) and 0 <= seed < 1 << 32):
+        raise ArgumentError(f"seed must be an integer in [0, 2^32), got {seed!r}")
     tasks = mitsuba_tiles(width, height, seed)
     image = np.zeros((height, width, 3), np.float32)
+    cluster = default_cluster() if cluster is None else cluster  # `reflets bench --cluster`: its references there
     place = places(1 if cluster is None else None, cluster)
     try:
         with place.start(MitsubaTiles, (scene, (width, height), spp, seed)) as tiles:

@@ -42,7 +42,7 @@ from ..scene.model import DirectionalLight, PointLight, Scene
 from .geometry import EMITTERS, MESHES, SceneGeometry
 from .lights import EnvironmentSampler, PolygonSampler
 from .mirrors import MirrorBounce
-from .parallel import places
+from .parallel import places, within_memory
 from .transmission import MAX_CROSSINGS, NUMBERS_PER_CROSSING, Transmission
 
 RAYS_PER_CHUNK = 1 << 17
@@ -147,6 +147,8 @@ class MonteCarloReference:
         width, height = size or self.scene.camera.size
         n_pixels = width * height
         place = places(None if cluster is not None else workers, cluster)  # workers: this machine's (not a cluster's)
+        if workers is None:  # every core by default: as many as the memory holds (a count given is checked)
+            place = within_memory(place, REFERENCE_CHUNK_BYTES, n_pixels * REFERENCE_BYTES_PER_PIXEL)
         chunks = place.processes * REFERENCE_CHUNK_BYTES  # each process of this machine holds a chunk of rays
         try:
             check(

@@ -112,7 +112,8 @@ class _PoolSession:
             return
         if self.pool is None:
             method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-            self.pool = multiprocessing.get_context(method).Pool(self.workers, initializer=_init_worker,
+            processes = min(self.workers, len(tasks))  # no process without a task
+            self.pool = multiprocessing.get_context(method).Pool(processes, initializer=_init_worker,
                                                                  initargs=(self.build, self.args))  # fmt: skip
         for index, result in self.pool.imap_unordered(_local_task, enumerate(tasks)):
             advance(sizes[index])
@@ -126,7 +127,8 @@ _DEFAULT = contextvars.ContextVar("reflets_reference_place", default=None)
 def places(workers: int | None = None, cluster=None):
     """Where a reference runs: the Dask cluster ``cluster`` (an address, reflets.reference.cluster.connect, or a
     connected Cluster), else ``workers`` processes of this machine (one: this process); neither: the place of the
-    enclosing ``using`` block, else every core. Close it after the run (a place the caller opened stays open)."""
+    enclosing ``using`` block (a context variable: threads started in the block do not see it), else every core
+    (``cores()``). Close it after the run (a place the caller opened stays open)."""
     if cluster is not None:
         if workers is not None:
             raise ArgumentError("give either workers (this machine's processes) or a cluster, not both",
@@ -139,8 +141,38 @@ def places(workers: int | None = None, cluster=None):
     if workers is None:
         if _DEFAULT.get() is not None:
             return _Lent(_DEFAULT.get())
-        workers = os.cpu_count() or 1
+        workers = cores()
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ArgumentError(f"workers must be at least 1 (got {workers!r})", field="workers")
     return InProcess() if workers == 1 else LocalProcesses(workers)
+
+
+def within_memory(place, per_process: int, shared: int):
+    """``place`` with no more local processes than the memory budget holds (each needs ``per_process`` bytes
+    beside ``shared``): a default of every core must not refuse what one process can do. Other places as they are
+    (a lent pool of processes is a count, no process yet: a smaller one stands for it)."""
+    if not isinstance(place.place if isinstance(place, _Lent) else place, LocalProcesses):
+        return place
+    from ..resources import memory_budget
+
+    fitting = max(1, (memory_budget().bytes - shared) // max(per_process, 1))
+    if fitting >= place.processes:
+        return place
+    return InProcess() if fitting == 1 else LocalProcesses(int(fitting))
+
+
+def cores() -> int:
+    """The cores this process may run on (its CPU affinity: a container's or a job scheduler's share)."""
+    try:
+        return len(os.sched_getaffinity(0)) or 1
+    except AttributeError:  # not Linux
+        return os.cpu_count() or 1
+
+
+def default_cluster():
+    """The cluster of the enclosing ``using`` block, or None (this machine's processes, or none)."""
+    place = _DEFAULT.get()
+    return place if place is not None and not isinstance(place, InProcess | LocalProcesses) else None
 
 
 @contextlib.contextmanager

@@ -39,7 +39,7 @@ from ..translucency.optics import (
     sample_henyey_greenstein,
 )
 from .checkpoint import PartialSums, reference_key
-from .parallel import ordered, places
+from .parallel import ordered, places, within_memory
 from .results import VolumetricImage
 
 
@@ -337,9 +337,12 @@ def render_volumetric(
         raise ArgumentError(f"must be a number in (0, 1), got {target_error!r}", field="target_error")
     place = places(None if cluster is not None else workers, cluster)  # workers: this machine's (not a cluster's)
     try:
+        if workers is None:  # every core by default: as many as the memory holds (a count given is checked)
+            one = volumetric_bytes(scene, None, 1, refract)
+            place = within_memory(place, one, one)
         _check_memory(scene, place.processes, refract)
         job = _VolumetricJob(scene, refract, orders)
-        blocks = sample_blocks(spp, len(job.pix))
+        blocks = sample_blocks(spp, min(len(job.pix), VOLUMETRIC_TILE_PIXELS))  # a tile's
         tiles = pixel_tiles(len(job.pix))
         partial = None
         if checkpoint is not None:
@@ -572,7 +575,7 @@ class _BlockRunner:
                      for i, spp in enumerate(todo) for t, tile in enumerate(self.tiles)]  # fmt: skip
             try:
                 with place.start(_VolumetricJob, build_args, local=self.job) as session:
-                    sizes = [spp / n for spp, _, _ in tasks]
+                    sizes = [spp for spp, _, _ in tasks]  # a tile's samples: 1 / n of the image's
                     results = session.run(tasks, sizes, lambda k: bar.advance(task, k / n))
                     pixels = len(self.job.pix)
                     for index, (t, t2) in ordered(results):
