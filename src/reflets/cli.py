@@ -352,6 +352,9 @@ def cmd_reference(args) -> int:
     if args.cluster is not None:
         from .reference.cluster import check_address
 
+        if args.workers is not None:
+            raise ArgumentError("give either --workers (this machine's processes) or --cluster, not both",
+                                field="--workers")  # fmt: skip
         check_address(args.cluster)
     params = {"spp": args.spp, "seed": args.seed, "visibility": args.visibility, "pixel": args.pixel,
               "heuristic": args.mis, "size": size, "target_error": args.target_error}  # fmt: skip
@@ -363,9 +366,12 @@ def cmd_reference(args) -> int:
     elif args.engine == "mitsuba" and args.cluster is None:
         place = places(1)  # Mitsuba's own threads take every core
     else:
-        place = places(args.workers, args.cluster)
-    # the Mitsuba bridge's crop windows go to a cluster named, never to this machine's processes
+        place = places(None, args.cluster)  # every core (fitted to the memory), or one cluster connection
+    # the Mitsuba bridge's crop windows go to a cluster named, never to this machine's processes; a count of
+    # processes given is the reference's own (checked against the memory as given)
     where = {"cluster": place} if args.engine == "mitsuba" and args.cluster is not None else {}
+    if args.workers is not None and args.engine != "mitsuba":
+        where = {"workers": args.workers}
 
     def render(item):
         return reference(item.scene, spp=args.spp, seed=args.seed, engine=args.engine,

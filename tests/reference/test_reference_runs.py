@@ -154,6 +154,8 @@ def test_every_core_by_default(monkeypatch):
     for bad in (0, -3, 2.5, True):
         with pytest.raises(ArgumentError, match="at least 1"):
             parallel.places(bad)
+    with pytest.raises(ArgumentError, match=r"^workers: 1000000000 needs about .* fits\)$"):  # a count given
+        reflets.reference(reflets.load_dict({**SCENE, "materials": {"skin": {"type": "lambert"}}}), workers=10**9)
     with pytest.raises(ArgumentError, match="at least 1"):
         reflets.reference(reflets.load_dict(SCENE), engine="volumetric", workers=0)
 

@@ -51,7 +51,8 @@ def plan(sources: list[str], output: str | None, load: Callable, *, engine: str,
     if batch and folder is None:
         raise ArgumentError("several scenes need -o FOLDER (an existing folder)", field="-o")
     if batch and not folder.is_dir():
-        raise OutputError("several scenes are written into a folder: it must exist", file=folder)
+        raise OutputError("several scenes are written into a folder: "
+                          + ("this is a file" if folder.exists() else "it must exist"), file=folder)  # fmt: skip
     index = _read_index(folder / INDEX) if batch else {}
     planned: list[Planned] = []
     for source in sources:

@@ -150,6 +150,12 @@ class MonteCarloReference:
         if workers is None:  # every core by default: as many as the memory holds (a count given is checked)
             place = within_memory(place, REFERENCE_CHUNK_BYTES, n_pixels * REFERENCE_BYTES_PER_PIXEL)
         chunks = place.processes * REFERENCE_CHUNK_BYTES  # each process of this machine holds a chunk of rays
+        image_bytes = n_pixels * REFERENCE_BYTES_PER_PIXEL
+        if place.processes > 1:  # a count of processes given: the one to lower when it is what does not fit
+            check("workers", chunks + image_bytes, value=place.processes,
+                  what=f"{place.processes:,} processes × a chunk of rays ({REFERENCE_CHUNK_BYTES // 10**6} MB) + "
+                  "the image",
+                  fits=lambda budget: max(budget - image_bytes, 0) // REFERENCE_CHUNK_BYTES or None)  # fmt: skip
         try:
             check(
                 "size",
