@@ -37,8 +37,9 @@ from ..resources import as_reference_worker
 #: seconds to reach the scheduler, then for a first worker to be there
 CONNECT_TIMEOUT_S = 10.0
 WORKER_TIMEOUT_S = 30.0
-#: the packages whose versions must match between this process and every worker
-MATCHED = ("reflets", "numpy", "scipy", "embreex", "trimesh", "mitsuba", "distributed", "cloudpickle")
+#: the packages whose versions must match between this process and every worker (Mitsuba is optional: a worker
+#: without it refuses the Mitsuba bridge's windows in one line, and a worker needs only `pip install reflets`)
+MATCHED = ("reflets", "numpy", "scipy", "embreex", "trimesh", "distributed", "cloudpickle")
 
 
 def engine_version() -> str | None:
@@ -193,7 +194,9 @@ class _ClusterSession:
                        for index, task in enumerate(tasks)]  # fmt: skip
         self.pending.update(futures)
         index_of = {future.key: index for index, future in enumerate(futures)}
-        for future in as_completed(futures, loop=client.loop):
+        completed = as_completed(futures, loop=client.loop)
+        del futures  # a result is held by nothing here once it has been yielded: the workers release it
+        for future in completed:
             index = index_of[future.key]
             try:
                 with self._said():
