@@ -108,6 +108,16 @@ def test_bad_inputs_are_one_line(files, capsys, tmp_path):
         assert len(err.splitlines()) == 1 and "Traceback" not in err, err
 
 
+def test_a_camera_index_out_of_range_is_refused_before_opencv_sees_it():
+    """``ar run --webcam -1`` ended in a segmentation fault inside cv2.VideoCapture: refused first, one line."""
+    from reflets.ar.video import MAX_CAMERA_INDEX, FrameSource
+    from reflets.errors import ArgumentError
+
+    for bad in (-1, MAX_CAMERA_INDEX + 1, 10**9, True):
+        with pytest.raises(ArgumentError, match=f"^--webcam: a camera index is from 0 to {MAX_CAMERA_INDEX}"):
+            FrameSource.open([], bad)
+
+
 def test_a_short_video_round_trips(tmp_path):
     """ar run's video path: frames written by FrameSink come back through FrameSource (OpenCV's codecs)."""
     from reflets.ar.video import FrameSink, FrameSource

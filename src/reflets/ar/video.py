@@ -19,6 +19,10 @@ IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"}
 FPS = 30.0
 
 
+#: the largest camera number accepted (OpenCV's V4L backend has /dev/video0 … 63)
+MAX_CAMERA_INDEX = 63
+
+
 @dataclass
 class FrameSource:
     images: list[Path] | None = None
@@ -27,10 +31,15 @@ class FrameSource:
 
     @classmethod
     def open(cls, inputs: list[str], webcam: int | None) -> FrameSource:
+        """Frames from ``inputs`` (a video file or images) or camera number ``webcam``."""
         cv2 = _aruco()
         if webcam is not None:
             if inputs:
                 raise ArgumentError("give either input files or --webcam, not both", field="--webcam")
+            if isinstance(webcam, bool) or not isinstance(webcam, int) or not 0 <= webcam <= MAX_CAMERA_INDEX:
+                # refused before OpenCV sees it: VideoCapture(-1) ended in a segmentation fault (issue 32)
+                raise ArgumentError(f"a camera index is from 0 to {MAX_CAMERA_INDEX}, got {webcam!r}",
+                                    field="--webcam")  # fmt: skip
             capture = cv2.VideoCapture(int(webcam))
             if not capture.isOpened():
                 raise ArgumentError(f"camera {webcam} cannot be opened", field="--webcam")
