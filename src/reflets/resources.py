@@ -236,12 +236,13 @@ def as_reference_worker() -> None:
     """Set up a process that runs a reference's tasks (a local worker, a Dask worker) as one core's worth of work:
 
     - one BLAS thread: OpenBLAS's own threads (one per core, spinning on the references' small products) would
-      take the other workers' cores — measured: one process of the numpy engine used 1.6 cores of 2 for no gain,
-      and two processes ran 1.2× faster than one instead of 1.85×;
+      take the other workers' cores;
     - glibc's malloc keeps freed memory for the next tile: Dask's nanny starts workers with
       ``MALLOC_TRIM_THRESHOLD_=65536``, which also turns off glibc's growing mmap threshold, so every array of a
-      tile came from a fresh mmap and its pages were faulted in again — measured: an area-light reference on a
-      local cluster of 2 workers took 7.0 s instead of 3.5 s. Arrays under 32 MB come from the heap again, kept."""
+      tile came from a fresh mmap and its pages were faulted in again. Arrays under 32 MB come from the heap
+      again, kept.
+    (`reflets bench reference-scale` before both: an area-light reference 1.20× faster in 2 processes, 0.86× on
+    a 2-worker Dask cluster; docs/reference-scale.md.)"""
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1)

@@ -141,11 +141,11 @@ def test_a_version_mismatch_names_the_worker_and_the_versions():
 def test_a_shipped_scene_is_laid_out_from_its_files_contents(tmp_path, monkeypatch):
     """What a worker sees: the scene's paths under a folder of its content key, the files as they were."""
     scene = _mesh_scene(tmp_path)
-    shipped = clusters.ShippedScene.of(scene)
+    shipped, contents = clusters.ShippedScene.packed(scene)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "worker"))
     with pytest.raises(reflets.errors.RefletsError, match="was not sent to this worker"):
         shipped.scene()
-    clusters._keep_files({d: open(p, "rb").read() for p, d in shipped.files.items()})  # as a task keeps them
+    clusters._keep_files(contents)  # as a task keeps them
     there = shipped.scene()
     (mesh,) = there.input_files()
     assert str(mesh).startswith(str(tmp_path / "worker")) and mesh.read_bytes() == (tmp_path / "tri.obj").read_bytes()

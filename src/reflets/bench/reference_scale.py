@@ -49,7 +49,7 @@ def _translucent_scene(size):
 
 def _references(quick: bool) -> list[dict]:
     from ..demo import scene_path
-    from ..reference.volumetric import sample_blocks
+    from ..reference.volumetric import task_plan
     from ..scene import load_scene
 
     translucent_size, translucent_spp = ((32, 24), 16) if quick else ((64, 48), 32)
@@ -57,13 +57,13 @@ def _references(quick: bool) -> list[dict]:
     translucent = _translucent_scene(translucent_size)
     from ..reference.volumetric import _VolumetricJob
 
-    blocks = len(sample_blocks(translucent_spp, len(_VolumetricJob(translucent, None, None).pix)))
+    blocks, tiles = task_plan(translucent_spp, len(_VolumetricJob(translucent, None, None).pix))
     from ..reference.montecarlo import RAYS_PER_CHUNK
 
     tiles = -(-area_size[0] * area_size[1] // max(1, RAYS_PER_CHUNK // area_spp))
     return [
         {"name": "translucent (volumetric engine)", "scene": translucent, "engine": "volumetric",
-         "size": translucent_size, "spp": translucent_spp, "tasks": blocks},
+         "size": translucent_size, "spp": translucent_spp, "tasks": len(blocks) * len(tiles)},
         {"name": "area light (numpy engine)", "scene": load_scene(scene_path("11_ref_ggx_sphere_quad.toml")),
          "engine": "numpy", "size": area_size, "spp": area_spp, "tasks": tiles},
     ]  # fmt: skip

@@ -167,14 +167,7 @@ class _ClusterSession:
 
         if not isinstance(value, Scene):
             return value
-        shipped = ShippedScene.of(value)
-        contents = {}
-        for path, digest in shipped.files.items():
-            data = Path(path).read_bytes()
-            if hashlib.sha256(data).hexdigest() != digest:
-                raise RefletsError("changed while the reference was being sent to the cluster: run it again",
-                                   file=path)  # fmt: skip
-            contents[digest] = data
+        shipped, contents = ShippedScene.packed(value)
         new = sorted(set(contents) - set(self.files))
         if new:
             with self._said():
@@ -275,12 +268,13 @@ class ShippedScene:
     key: str
 
     @classmethod
-    def of(cls, scene) -> ShippedScene:
-        from ..cache import file_digest
-
+    def packed(cls, scene) -> tuple[ShippedScene, dict[str, bytes]]:
+        """The scene as it travels, and its files' contents by SHA-256 (each file read once)."""
         description = _map_paths(scene.model_dump(), lambda p: scene.resolve(p).resolve())
-        files = {str(path): file_digest(path) for path in sorted(scene.input_files())}
-        return cls(description, files, content_key({"scene": repr(description), "files": files}))
+        contents = {str(path): path.read_bytes() for path in sorted(scene.input_files())}
+        files = {path: hashlib.sha256(data).hexdigest() for path, data in contents.items()}
+        shipped = cls(description, files, content_key({"scene": repr(description), "files": files}))
+        return shipped, {files[path]: data for path, data in contents.items()}
 
     def scene(self):
         """The scene on this machine: its files laid out under a folder of its own, from the files kept."""

@@ -342,8 +342,7 @@ def render_volumetric(
             place = within_memory(place, one, one)
         _check_memory(scene, place.processes, refract)
         job = _VolumetricJob(scene, refract, orders)
-        blocks = sample_blocks(spp, min(len(job.pix), VOLUMETRIC_TILE_PIXELS))  # a tile's
-        tiles = pixel_tiles(len(job.pix))
+        blocks, tiles = task_plan(spp, len(job.pix))
         partial = None
         if checkpoint is not None:
             key = reference_key(scene, engine="volumetric", sampling=SAMPLING_VERSION, spp=spp, seed=seed,
@@ -499,6 +498,12 @@ VOLUMETRIC_TILE_PIXELS = 16_384
 def pixel_tiles(pixels: int) -> list[tuple[int, int]]:
     """The tiles (first, stop) of the object's ``pixels``: VOLUMETRIC_TILE_PIXELS each, the last one shorter."""
     return [(a, min(a + VOLUMETRIC_TILE_PIXELS, pixels)) for a in range(0, pixels, VOLUMETRIC_TILE_PIXELS)] or [(0, 0)]
+
+
+def task_plan(spp: int, pixels: int) -> tuple[list[int], list[tuple[int, int]]]:
+    """A reference's tasks: its blocks of samples (sized from a tile's pixels) and its tiles of the object's
+    ``pixels`` — every block walks every tile."""
+    return sample_blocks(spp, min(pixels, VOLUMETRIC_TILE_PIXELS)), pixel_tiles(pixels)
 
 
 def task_seed(seed: int, block: int, tile: int, tiles: int) -> np.random.SeedSequence:
