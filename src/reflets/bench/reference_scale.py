@@ -57,13 +57,13 @@ def _references(quick: bool) -> list[dict]:
     translucent = _translucent_scene(translucent_size)
     from ..reference.volumetric import _VolumetricJob
 
-    blocks, tiles = task_plan(translucent_spp, len(_VolumetricJob(translucent, None, None).pix))
+    blocks, pixel_tiles = task_plan(translucent_spp, len(_VolumetricJob(translucent, None, None).pix))
     from ..reference.montecarlo import RAYS_PER_CHUNK
 
     tiles = -(-area_size[0] * area_size[1] // max(1, RAYS_PER_CHUNK // area_spp))
     return [
         {"name": "translucent (volumetric engine)", "scene": translucent, "engine": "volumetric",
-         "size": translucent_size, "spp": translucent_spp, "tasks": len(blocks) * len(tiles)},
+         "size": translucent_size, "spp": translucent_spp, "tasks": len(blocks) * len(pixel_tiles)},
         {"name": "area light (numpy engine)", "scene": load_scene(scene_path("11_ref_ggx_sphere_quad.toml")),
          "engine": "numpy", "size": area_size, "spp": area_spp, "tasks": tiles},
     ]  # fmt: skip
