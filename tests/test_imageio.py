@@ -11,18 +11,18 @@ import sys
 import numpy as np
 import pytest
 
-from reflets import imageio
+from reflets import outputs
 from reflets.errors import ArgumentError, ImageError, OutputError
 from reflets.imageio import (
     IMAGE_READ_EXTENSIONS,
     IMAGE_WRITE_EXTENSIONS,
-    check_output_path,
     linear_to_srgb,
     read_image,
     srgb_to_linear,
     tonemap,
     write_image,
 )
+from reflets.outputs import check_output_path
 
 
 def _png_bytes_of(path):
@@ -341,7 +341,7 @@ def test_failed_replace_keeps_existing_file_and_removes_temporary(tmp_path, monk
     def failing_replace(src, dst):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(imageio.os, "replace", failing_replace)
+    monkeypatch.setattr(outputs.os, "replace", failing_replace)
     with pytest.raises(OutputError, match=r"old\.npy: cannot write file \(No space left on device\)"):
         write_image(path, _gray([2.0]))
 
@@ -384,12 +384,12 @@ def test_unwritable_directory_raises_output_error(tmp_path):
 
 
 def test_check_output_path_validates_without_creating_anything(tmp_path):
-    assert check_output_path(tmp_path / "render.EXR") == tmp_path / "render.EXR"
+    assert check_output_path(tmp_path / "render.EXR", IMAGE_WRITE_EXTENSIONS) == tmp_path / "render.EXR"
     assert check_output_path(tmp_path / "a.json", allowed=(".json",)) == tmp_path / "a.json"
     with pytest.raises(OutputError, match=r"allowed: \.json"):
         check_output_path(tmp_path / "a.png", allowed=("json",))
     with pytest.raises(OutputError, match=r"does not exist"):
-        check_output_path(tmp_path / "no" / "a.png")
+        check_output_path(tmp_path / "no" / "a.png", IMAGE_WRITE_EXTENSIONS)
     assert list(tmp_path.iterdir()) == []
 
 

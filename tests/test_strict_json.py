@@ -89,6 +89,45 @@ def test_write_writes_strict_utf8(tmp_path):
 # ---------------------------------------------------------------- the CLI's --json outputs and JSON files
 
 
+@pytest.mark.parametrize(("content", "said"), [
+    ('{"a": 1, "a": 2}', "key 'a' is given twice"),
+    ('{"markers": {"0": [], "0": []}}', "key '0' is given twice"),
+    ('{"a": NaN}', "NaN is not JSON"),
+    ('[-Infinity]', "-Infinity is not JSON"),
+    ("[" * 100_000 + "]" * 100_000, "nested too deeply"),
+    (b"\xff\xfe{", "not a text file"),
+    ('{"a": 1', "not a board"),
+    (None, "is a directory"),
+])  # fmt: skip
+def test_json_inputs_are_read_strictly_and_refused_in_one_line(tmp_path, content, said):
+    """What every JSON input of a command goes through (a board, intrinsics, strokes, an event script)."""
+    from reflets.errors import ArgumentError
+
+    path = tmp_path / "in.json"
+    if content is None:
+        path.mkdir()
+    elif isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content)
+    with pytest.raises(ArgumentError) as caught:
+        jsonio.read(path, field="--board", what="a board")
+    assert said in str(caught.value) and "\n" not in str(caught.value) and "--board" in str(caught.value)
+
+
+def test_a_json_input_past_the_size_bound_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    from reflets.errors import ArgumentError
+
+    path = tmp_path / "big.json"
+    path.write_text("[" + "0," * 1000 + "0]")
+    monkeypatch.setattr(jsonio, "MAX_JSON_BYTES", 1000)
+    with pytest.raises(ArgumentError, match="is 2,003 bytes; a script is at most 1,000"):
+        jsonio.read(path, what="a script")
+    small = tmp_path / "ok.json"
+    small.write_text('{"a": [1, 2.5]}')
+    assert jsonio.read(small) == {"a": [1, 2.5]}
+
+
 def test_compare_identical_images_gives_strict_json_with_psnr_null(capsys, tmp_path, rng):
     path = tmp_path / "x.exr"
     write_image(path, rng.random((12, 16, 3)).astype(np.float32))

@@ -48,26 +48,27 @@ def check_spp(spp) -> int | None:
     return int(spp)
 
 
-def read_json(path: str | Path, field: str, what: str, parse=lambda data: data):
-    """``parse`` of a JSON file's content (an event script, strokes, a board, camera intrinsics), or a one-line
-    error naming the file and the option: a missing file, invalid JSON, a missing key, a wrong shape."""
-    import json
+def validated(model, data, *, file: str | Path | None = None, field: str | None = None):
+    """``model.model_validate(data)`` (a pydantic model of an input file: a board, camera intrinsics, strokes, an
+    event script), or its first error as one ArgumentError naming the file, the option that gave it and the place
+    in the file (``markers.3[2]``: key, then list index)."""
+    from pydantic import ValidationError
 
-    path = Path(path)
     try:
-        return parse(json.loads(path.read_text(encoding="utf-8")))
-    except FileNotFoundError:
-        raise ArgumentError("file not found", file=path, field=field) from None
-    except (ValueError, KeyError, TypeError, IndexError, UnicodeDecodeError) as exc:
-        raise ArgumentError(f"not {what} ({exc})", file=path, field=field) from None
+        return model.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors(include_url=False)[0]
+        place = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err["loc"]).lstrip(".")
+        msg = err["msg"].removeprefix("Value error, ").removeprefix("Assertion failed, ")
+        got = repr(err.get("input"))
+        got = got if len(got) <= 60 else got[:57] + "..."
+        text = f"{msg[0].lower()}{msg[1:]}" if err["type"] in ("value_error", "assertion_error") else (
+            f"{msg[0].lower()}{msg[1:]} (got {got})")  # fmt: skip
+        raise ArgumentError(f"{place}: {text}" if place else text, file=file, field=field) from None
 
 
-def read_json_list(path: str | Path, field: str, what: str) -> list:
-    """A JSON file holding a list (an event script, a list of strokes)."""
+def read_model(model, path: str | Path, *, field: str, what: str):
+    """A JSON input file read strictly (reflets.jsonio.read) and validated by ``model`` (:func:`validated`)."""
+    from . import jsonio
 
-    def as_list(data):
-        if not isinstance(data, list):
-            raise TypeError("the file must hold a JSON list")
-        return data
-
-    return read_json(path, field, f"a JSON list of {what}", as_list)
+    return validated(model, jsonio.read(path, field=field, what=what), file=path, field=field)

@@ -4,9 +4,11 @@
 - ``cache_dir(kind)``: ``$XDG_CACHE_HOME/reflets/<kind>`` (default ``~/.cache``);
 - ``content_key(data)``: a digest of a JSON-able description (what a result depends on, code hashes included),
   ``file_stamp`` / ``file_digest`` for the files it reads, ``source_hash`` for the source files it runs;
-- ``Cache(kind, load, save)``: memory first (least recently used out past a byte budget: a long session that
-  edits materials does not grow without bound), then the disk (a broken or stale file is recomputed, a
-  read-only disk only costs the recomputation), then ``make`` — stored in both;
+- ``Cache(kind, load, save)``: memory first, then the disk (a broken or stale file is recomputed, a read-only
+  disk only costs the recomputation), then ``make`` — stored in both. Every cache of the process shares one
+  memory budget (``REFLETS_CACHE_MB``, default 256 MB; 0: nothing kept in memory), the least recently used
+  entry of any of them out past it: a long session that edits materials (each variant its tables and α maps)
+  does not grow without bound, nor by one budget per kind of result;
 - ``Memo(size)``: small values (a number, a word) by key, in memory only, the least recently used out past
   ``size`` entries.
 """
@@ -24,10 +26,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import RefletsError
+from .errors import ArgumentError, RefletsError
 
-#: default memory budget of one cache (bytes)
-MEMORY_BUDGET = 256 << 20
+#: the environment variable setting the memory every cache of the process shares, in MB (10⁶ bytes; 0: none)
+ENV_VAR = "REFLETS_CACHE_MB"
+#: that memory when the variable is not set (MB)
+DEFAULT_MB = 256
 
 
 def cache_dir(kind: str) -> Path:
@@ -97,26 +101,51 @@ class Memo:
         return len(self._values)
 
 
-class Cache:
-    """Memory (bounded LRU) + disk cache of one kind of result, stored as ``<key>.npz``."""
+def cache_budget() -> int:
+    """Bytes every cache of the process may hold together: ``REFLETS_CACHE_MB`` × 10⁶ (read at each store: a test
+    or a session may change it), else DEFAULT_MB. Not a non-negative number: an ArgumentError naming it."""
+    text = os.environ.get(ENV_VAR, "").strip()
+    if not text:
+        return DEFAULT_MB * 10**6
+    try:
+        mb = float(text)
+    except ValueError:
+        mb = -1.0
+    if not 0 <= mb < 2**43:  # NaN and inf fail too
+        raise ArgumentError(f"{text!r} is not a non-negative number of MB (e.g. 256; 0 keeps nothing in memory)",
+                            field=ENV_VAR)  # fmt: skip
+    return int(mb * 10**6)
 
-    def __init__(
-        self,
-        kind: str,
-        load: Callable[[Path], object],
-        save: Callable[[object, Path], None],
-        memory_budget: int = MEMORY_BUDGET,
-    ):
-        self.kind, self._load, self._save, self.memory_budget = kind, load, save, memory_budget
-        self._memory: OrderedDict[str, tuple[object, int]] = OrderedDict()
+
+class _Shared:
+    """The memory every Cache of the process shares: its entries, least recently used first ((cache, key) →
+    bytes; caches hash by identity), their total, and the lock renders on several threads take (``make`` runs
+    outside it)."""
+
+    def __init__(self):
+        self.entries: OrderedDict[tuple[Cache, str], int] = OrderedDict()
+        self.bytes = 0
+        self.lock = threading.RLock()
+
+
+_SHARED = _Shared()
+
+
+class Cache:
+    """Memory + disk cache of one kind of result, stored as ``<key>.npz``; its memory within the budget every
+    cache of the process shares (:func:`cache_budget`)."""
+
+    def __init__(self, kind: str, load: Callable[[Path], object], save: Callable[[object, Path], None]):
+        self.kind, self._load, self._save = kind, load, save
+        self._memory: dict[str, tuple[object, int]] = {}
         self._bytes = 0
-        self._lock = threading.RLock()  # renders from several threads share a cache; ``make`` runs outside it
 
     def get(self, key: str, make: Callable[[], object]):
         """The result under ``key``: from memory, else from disk, else ``make()`` (then stored in both)."""
-        with self._lock:
+        budget = cache_budget()  # a bad REFLETS_CACHE_MB is said before anything is computed
+        with _SHARED.lock:
             if key in self._memory:
-                self._memory.move_to_end(key)
+                _SHARED.entries.move_to_end((self, key))
                 return self._memory[key][0]
         path = cache_dir(self.kind) / f"{key}.npz"
         value = None
@@ -128,19 +157,19 @@ class Cache:
         if value is None:
             value = make()
             self._store(path, value)
-        self._remember(key, value)
+        self._remember(key, value, budget)
         return value
 
     def peek(self, key: str):
         """The result under ``key`` if it is in memory, else None (nothing loaded, nothing made)."""
-        with self._lock:
+        with _SHARED.lock:
             entry = self._memory.get(key)
         return None if entry is None else entry[0]
 
     def clear_memory(self) -> None:
-        with self._lock:
-            self._memory.clear()
-            self._bytes = 0
+        with _SHARED.lock:
+            for key in list(self._memory):
+                self._forget(key)
 
     @property
     def memory_bytes(self) -> int:
@@ -149,16 +178,29 @@ class Cache:
     def __len__(self) -> int:
         return len(self._memory)
 
-    def _remember(self, key: str, value) -> None:
+    def _remember(self, key: str, value, budget: int) -> None:
+        """Keep ``value`` in memory, and drop the least recently used entries of every cache past the budget; the
+        newest stays even alone over it (the render that asked uses it again at once) unless the budget is 0."""
         size = size_of(value)
-        with self._lock:
+        with _SHARED.lock:
             if key in self._memory:  # another thread made it meanwhile
-                self._bytes -= self._memory.pop(key)[1]
+                self._forget(key)
+            if budget == 0:
+                return
             self._memory[key] = (value, size)
             self._bytes += size
-            while self._bytes > self.memory_budget and len(self._memory) > 1:
-                _, (_, dropped) = self._memory.popitem(last=False)
-                self._bytes -= dropped
+            _SHARED.entries[(self, key)] = size
+            _SHARED.bytes += size
+            while _SHARED.bytes > budget and len(_SHARED.entries) > 1:
+                cache, oldest = next(iter(_SHARED.entries))
+                cache._forget(oldest)
+
+    def _forget(self, key: str) -> None:
+        """Drop ``key`` from memory (the shared lock held)."""
+        size = self._memory.pop(key)[1]
+        self._bytes -= size
+        del _SHARED.entries[(self, key)]
+        _SHARED.bytes -= size
 
     def _store(self, path: Path, value) -> None:
         try:

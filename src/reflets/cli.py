@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from . import jsonio
-from .errors import ARRAY_READ_ERRORS, ArgumentError, OutputError, RefletsError
+from .errors import ArgumentError, OutputError, RefletsError
 
 EXIT_USER_ERROR = 2
 
@@ -75,6 +75,11 @@ def _scene_argument(args):
     return load_scene(args.scene, camera=args.camera, environment=args.environment)
 
 
+def _overwrite_option(p) -> None:
+    """Every command that writes files refuses to replace one unless told (reflets.outputs)."""
+    p.add_argument("--overwrite", action="store_true", help="replace output files that exist (refused otherwise)")
+
+
 def _asset_options(p) -> None:
     p.add_argument("--camera", help="a glTF file's camera (index or name; default its first, else one framing it)")
     p.add_argument(
@@ -84,13 +89,14 @@ def _asset_options(p) -> None:
 
 def cmd_render(args) -> int:
     from .api import render
-    from .imageio import IMAGE_WRITE_EXTENSIONS, check_not_input, check_output_path, write_image
+    from .imageio import IMAGE_WRITE_EXTENSIONS, write_image
+    from .outputs import check_output, check_output_path
 
-    out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".exr")
-    check_output_path(out, IMAGE_WRITE_EXTENSIONS)
+    out = check_output_path(args.output or Path(args.scene).stem + ".exr", IMAGE_WRITE_EXTENSIONS)  # a typo: at once
     size = _size(args.size) if args.size else None
     scene = _scene_argument(args)
-    check_not_input(out, scene.input_files() | {Path(args.scene)})
+    check_output(out, IMAGE_WRITE_EXTENSIONS, inputs=scene.input_files() | {Path(args.scene)},
+                 overwrite=args.overwrite)  # fmt: skip
     _check_render_memory(out, size or tuple(scene.camera.size))
     image = render(scene, method=args.method, size=size, seed=args.seed, spp=args.spp, **_params(args.param))
     write_image(out, image, exposure=args.exposure, tonemap=args.tonemap, bit_depth=args.bit_depth)
@@ -99,27 +105,40 @@ def cmd_render(args) -> int:
 
 
 def cmd_view(args) -> int:
-    from .imageio import IMAGE_WRITE_EXTENSIONS, check_not_input, check_output_path
-    from .viewer.window import ViewerWindow, load_script
+    from .imageio import IMAGE_WRITE_EXTENSIONS
+    from .outputs import check_output
+    from .viewer.events import parse_event
+    from .viewer.window import ViewerWindow, check_frames, load_script
 
     script = load_script(args.script) if args.script else None
-    if args.screenshot:
-        check_output_path(Path(args.screenshot), IMAGE_WRITE_EXTENSIONS)
-    if args.save_scene and Path(args.save_scene).exists():
-        raise ArgumentError("exists already; choose another name (nothing was written)", file=args.save_scene)
-    if args.frames is not None and args.frames < 1:
-        raise ArgumentError(f"must be at least 1, got {args.frames}", field="--frames")
+    outputs = {"--screenshot": (args.screenshot, IMAGE_WRITE_EXTENSIONS), "--save-scene": (args.save_scene, (".toml",)),
+               "--stats": (args.stats, (".json",))}  # fmt: skip
+
+    def check_outputs(inputs) -> None:  # before the first frame; again once the scene's own files are known
+        for option, (path, allowed) in outputs.items():
+            if path is not None:
+                check_output(path, allowed, inputs=inputs, overwrite=args.overwrite, field=option)
+
+    check_outputs([args.scene, args.script])
+    check_frames(args.frames)
+    if args.screenshot and args.frames is None:
+        raise ArgumentError("is written after the frames --frames N asks for; give --frames (an interactive "
+                            "window saves screenshots with its panel)", field="--screenshot")  # fmt: skip
+    try:  # before the window opens
+        parse_event({"type": "exposure", "stops": args.exposure})
+    except ArgumentError as exc:
+        raise ArgumentError(exc.message, field="--exposure") from None
     size = _size(args.size) if args.size else None
     window = ViewerWindow(args.scene, method=args.method, size=size, **_params(args.param))
-    if args.screenshot:
-        try:
-            check_not_input(args.screenshot, window.controller.scene.input_files() | {Path(args.scene)})
-        except OutputError:
-            window.close()
-            raise
+    try:
+        check_outputs(window.controller.scene.input_files())
+    except OutputError:
+        window.close()
+        raise
     window.controller.handle({"type": "exposure", "stops": args.exposure})
     window.controller.handle({"type": "tonemap", "mode": args.tonemap})
-    status = window.run(frames=args.frames, screenshot=args.screenshot, script=script, save_scene=args.save_scene)
+    status = window.run(frames=args.frames, screenshot=args.screenshot, script=script, save_scene=args.save_scene,
+                        overwrite=args.overwrite)  # fmt: skip
     if args.screenshot:
         print(f"wrote {args.screenshot}")
     if args.save_scene:
@@ -138,8 +157,11 @@ def cmd_view(args) -> int:
 def cmd_highlights(args) -> int:
     from .arguments import as_scene
     from .editing.highlights import mesh_highlights, write_highlights
+    from .outputs import check_output
 
+    check_output(args.output, (".npz",), inputs=[args.scene], overwrite=args.overwrite)
     scene = as_scene(args.scene)
+    check_output(args.output, (".npz",), inputs=scene.input_files(), overwrite=args.overwrite)
     result = mesh_highlights(scene, args.mesh, light=args.light)
     out = write_highlights(args.output, result)
     n, bad = len(result["ell"]), int(result["degenerate"].sum())
@@ -149,28 +171,28 @@ def cmd_highlights(args) -> int:
 
 def cmd_edit_highlights(args) -> int:
     from .arguments import as_scene
-    from .editing.highlights import edit_highlights, write_highlights
+    from .editing.highlights import checked_mesh, edit_highlights, load_targets, write_highlights
+    from .editing.solver import check_iterations
+    from .editing.strokes import apply_strokes, load_strokes
+    from .outputs import check_output
 
-    scene = as_scene(args.scene)
     if (args.targets is None) == (args.strokes is None):
         raise ArgumentError("give --targets (ℓ* and a mask) or --strokes (a scripted session), one of them")
-    if args.strokes is not None:
-        from .editing.strokes import apply_strokes, load_strokes
-
+    inputs = [args.scene, args.targets, args.strokes]
+    check_output(args.output, (".npz",), inputs=inputs, overwrite=args.overwrite)
+    check_iterations(args.iterations, field="--iterations")
+    strokes = None if args.strokes is None else load_strokes(args.strokes)  # before the scene: cheap checks first
+    scene = as_scene(args.scene)
+    check_output(args.output, (".npz",), inputs=scene.input_files(), overwrite=args.overwrite)
+    if strokes is not None:
         result = apply_strokes(
-            scene, args.mesh, load_strokes(args.strokes), light=args.light, iterations=args.iterations
+            scene, args.mesh, strokes, light=args.light, iterations=args.iterations, file=args.strokes
         )
         out = write_highlights(args.output, result)
         energies = ", ".join(f"{a:.2e} → {b:.2e}" for a, b in result["energy"])
         print(f"wrote {out}: {len(result['energy'])} stroke(s), tensor energy {energies}")
         return 0
-    try:
-        with np.load(args.targets) as data:
-            targets, mask = data["ell"], data["mask"]
-    except FileNotFoundError:
-        raise ArgumentError("file not found", file=args.targets, field="--targets") from None
-    except (*ARRAY_READ_ERRORS, KeyError) as exc:
-        raise ArgumentError(f"not an .npz with 'ell' and 'mask' ({exc})", file=args.targets) from None
+    targets, mask = load_targets(args.targets, checked_mesh(scene, args.mesh, editing=True).n_vertices)
     result = edit_highlights(scene, args.mesh, targets, mask, light=args.light, iterations=args.iterations)
     out = write_highlights(args.output, result)
     energy = result["energy"]
@@ -181,8 +203,10 @@ def cmd_edit_highlights(args) -> int:
 def cmd_export_gltf(args) -> int:
     from .arguments import as_scene
     from .gltf import export_gltf
+    from .outputs import check_output
 
-    path, notes = export_gltf(as_scene(args.scene), args.output)
+    check_output(args.output, (".glb",), inputs=[args.scene], overwrite=args.overwrite)
+    path, notes = export_gltf(as_scene(args.scene), args.output, overwrite=args.overwrite)
     for note in notes:
         print(f"approximated: {note}")
     print(f"wrote {path}")
@@ -192,59 +216,58 @@ def cmd_export_gltf(args) -> int:
 def cmd_ar_board(args) -> int:
     from .ar.board import Board
     from .imageio import write_png8
+    from .outputs import check_output
 
+    out = check_output(args.output, (".json",), overwrite=args.overwrite)
+    if args.image:
+        check_output(args.image, (".png",), overwrite=args.overwrite, field="--image")
     board = Board.grid(args.columns, args.rows, args.size, args.gap, args.dictionary)
     board.cv_dictionary()  # an unknown dictionary fails before anything is written
-    out = board.save(args.output)
-    print(f"wrote {out} ({len(board.markers)} markers)")
-    if args.image:
-        image, _ = board.image()
+    image = board.image()[0] if args.image else None  # made before the first file is written
+    print(f"wrote {board.save(out)} ({len(board.markers)} markers)")
+    if image is not None:
         print(f"wrote {write_png8(args.image, np.repeat(image[..., None], 3, axis=2))}")
     return 0
 
 
-def _read_grey_images(names: list[str], mode: str = "L") -> list[np.ndarray]:
-    """Camera images as uint8 arrays, grey (what marker detection reads) or ``mode="RGB"``; an unreadable one
-    is named."""
-    from PIL import Image
+def _ar_files(args) -> tuple:
+    """The board and the intrinsics of an ``ar`` command (read first: small files, checked whole)."""
+    from .ar.board import Board
+    from .ar.camera import Intrinsics
 
-    frames = []
-    for name in names:
-        try:
-            frames.append(np.asarray(Image.open(name).convert(mode)))
-        except (OSError, ValueError) as exc:
-            raise ArgumentError(f"cannot read the image ({exc})", file=name) from None
-    return frames
+    return Board.load(args.board), Intrinsics.load(args.intrinsics)
 
 
 def cmd_ar_track(args) -> int:
-    from .ar.board import Board
-    from .ar.camera import Intrinsics
+    from .ar.images import read_frames
     from .ar.tracking import track
+    from .outputs import check_output
 
-    board, intrinsics = Board.load(args.board), Intrinsics.load(args.intrinsics)
-    frames = _read_grey_images(args.images)
-    poses = track(frames, board, intrinsics)
+    out = check_output(args.output, (".json",), inputs=[*args.images, args.board, args.intrinsics],
+                       overwrite=args.overwrite)  # fmt: skip
+    board, intrinsics = _ar_files(args)
+    poses = track(read_frames(args.images, size=intrinsics.size), board, intrinsics, names=args.images)
     views = [
         {"image": str(name), "R_world_to_cam": p.R.tolist(), "t_world_to_cam": p.t.tolist(), "markers": p.markers}
         if p is not None
         else {"image": str(name), "R_world_to_cam": None, "t_world_to_cam": None, "markers": 0}
         for name, p in zip(args.images, poses, strict=True)
     ]
-    jsonio.write(args.output, {"views": views}, indent=1)
+    jsonio.write(out, {"views": views}, indent=1)
     found = sum(p is not None for p in poses)
-    print(f"wrote {args.output}: a pose for {found} of {len(poses)} images")
+    print(f"wrote {out}: a pose for {found} of {len(poses)} images")
     return 0
 
 
 def cmd_ar_calibrate(args) -> int:
     from .ar.board import Board
     from .ar.calibration import MIN_MARKERS, calibrate
-    from .imageio import check_output_path
+    from .ar.images import read_frames
+    from .outputs import check_output
 
-    out = check_output_path(args.output, (".json",))
+    out = check_output(args.output, (".json",), inputs=[*args.images, args.board], overwrite=args.overwrite)
     board = Board.load(args.board)
-    result = calibrate(_read_grey_images(args.images), board, names=args.images)
+    result = calibrate(read_frames(args.images), board, names=args.images)
     K, dist = result.intrinsics.K, result.intrinsics.dist
     print(f"fx {K[0, 0]:.2f}  fy {K[1, 1]:.2f}  cx {K[0, 2]:.2f}  cy {K[1, 2]:.2f}")
     print("dist (k1 k2 p1 p2 k3) " + " ".join(f"{d:.5f}" for d in dist))
@@ -254,31 +277,31 @@ def cmd_ar_calibrate(args) -> int:
     return 0
 
 
-def _ar_session(args, objects_path: str):
-    """The board, the intrinsics and a Session for ``reflets ar composite`` / ``ar run``."""
-    from .ar.board import Board
-    from .ar.camera import Intrinsics
+def _ar_inputs(args, *more) -> list:
+    """Every file ``ar composite`` / ``ar run`` reads that an output could name (the scene's own files: later)."""
+    return [args.scene, args.board, args.intrinsics, args.environment, *more]
+
+
+def _ar_session(args, board, intrinsics, objects):
+    """A Session for ``reflets ar composite`` / ``ar run``."""
     from .ar.capture import CubeMap
     from .ar.session import CUBE_SIZE, Session
-    from .arguments import as_scene
     from .imageio import read_image
+    from .quantities import MAX_MAGNITUDE
 
-    board, intrinsics = Board.load(args.board), Intrinsics.load(args.intrinsics)
-    objects = as_scene(objects_path)
     cube = None
     if args.environment:  # a light probe instead of the capture
         cube = CubeMap.from_equirect(read_image(args.environment), CUBE_SIZE)
-    if args.radius is not None and args.radius <= 0:
-        raise ArgumentError(f"must be positive, got {args.radius}", field="--radius")
-    return Session(objects, board, intrinsics, mode=args.mode, radius=args.radius, cube=cube,
-                   supersample=args.supersample, method=args.method)  # fmt: skip
-
-
-def _check_frame_size(frame: np.ndarray, intrinsics, **where) -> None:
-    """A frame must be the size the intrinsics were calibrated at (``where``: the error's file or field)."""
-    if tuple(frame.shape[1::-1]) != tuple(intrinsics.size):
-        w, h = intrinsics.size
-        raise ArgumentError(f"is {frame.shape[1]}x{frame.shape[0]}, the intrinsics are for {w}x{h}", **where)
+    if args.radius is not None and not 0 < args.radius <= MAX_MAGNITUDE:
+        raise ArgumentError(f"must be a positive number of board units (at most {MAX_MAGNITUDE:g}), got "
+                            f"{args.radius}", field="--radius")  # fmt: skip
+    try:
+        return Session(objects, board, intrinsics, mode=args.mode, radius=args.radius, cube=cube,
+                       supersample=args.supersample, method=args.method)  # fmt: skip
+    except ArgumentError as exc:
+        if exc.field == "supersample":  # the option that gave it
+            raise ArgumentError(exc.message, field="--supersample") from None
+        raise
 
 
 def _print_timings(timings: list[dict[str, float]]) -> None:
@@ -288,22 +311,25 @@ def _print_timings(timings: list[dict[str, float]]) -> None:
 
 
 def cmd_ar_composite(args) -> int:
-    from .imageio import check_output_path, write_png8
+    from .ar.images import read_frames
+    from .arguments import as_scene
+    from .imageio import write_png8
+    from .outputs import check_output
 
-    out = check_output_path(args.output, (".png",))
+    inputs = _ar_inputs(args, args.background, *(args.capture or []))
+    out = check_output(args.output, (".png",), inputs=inputs, overwrite=args.overwrite)
     if args.capture and args.environment:
         raise ArgumentError("give --capture frames or an --environment light probe, not both", field="--environment")
-    (background,) = _read_grey_images([args.background], "RGB")
-    captures = _read_grey_images(args.capture or [], "RGB")
-    session = _ar_session(args, args.scene)
-    _check_frame_size(background, session.intrinsics, file=args.background)
+    board, intrinsics = _ar_files(args)
+    (background,) = read_frames([args.background], "RGB", size=intrinsics.size)
+    captures = read_frames(args.capture or [], "RGB", size=intrinsics.size)
+    objects = as_scene(args.scene)
+    check_output(out, (".png",), inputs=objects.input_files(), overwrite=args.overwrite)
+    session = _ar_session(args, board, intrinsics, objects)
     pose = session.track(background)  # its own markers: never a pose kept from another frame
     if pose is None:
         raise ArgumentError("the board's markers are not found in the background frame", file=args.background)
-    tracked = 0
-    for frame, name in zip(captures, args.capture or [], strict=True):
-        _check_frame_size(frame, session.intrinsics, file=name)
-        tracked += session.process(frame, composite=False).pose is not None
+    tracked = sum(session.process(frame, composite=False).pose is not None for frame in captures)
     result = session.process(background, pose=pose)
     if captures:
         print(f"captured {tracked} of {len(captures)} frames (the others: no board found)")
@@ -313,25 +339,41 @@ def cmd_ar_composite(args) -> int:
     return 0
 
 
-def cmd_ar_run(args) -> int:
-    from .ar.video import FrameSink, FrameSource
+#: the most frames ``ar run --frames`` asks for (a day of video at 30 frames a second; without it a video runs to
+#: its end and a camera until interrupted)
+MAX_RUN_FRAMES = 30 * 86_400
 
-    source = FrameSource.open(args.inputs, args.webcam)
-    sink = FrameSink.open(args.output)
-    session = _ar_session(args, args.scene)
+
+def cmd_ar_run(args) -> int:
+    from .ar.images import check_intrinsics_size
+    from .ar.video import FrameSink, FrameSource
+    from .arguments import as_scene
+    from .outputs import check_not_input
+
+    if args.frames is not None and not 1 <= args.frames <= MAX_RUN_FRAMES:
+        raise ArgumentError(f"{args.frames:,} is out of range; a run stops after 1..{MAX_RUN_FRAMES:,} frames",
+                            field="--frames")  # fmt: skip
+    sink = FrameSink.open(args.output, overwrite=args.overwrite, inputs=_ar_inputs(args, *args.inputs))
+    board, intrinsics = _ar_files(args)
+    source = FrameSource.open(args.inputs, args.webcam, size=intrinsics.size)
+    objects = as_scene(args.scene)
+    check_not_input(sink.path, objects.input_files())
+    session = _ar_session(args, board, intrinsics, objects)
     timings, shown, posed = [], 0, 0
     try:
         for frame in source.frames(limit=args.frames):
-            _check_frame_size(frame, session.intrinsics, field="input frame")
+            check_intrinsics_size(frame.shape[1], frame.shape[0], intrinsics.size, field=f"input frame {shown}")
             result = session.process(frame)
             sink.write(result.composite.image if result.composite is not None else frame)
             timings.append(result.timings)
             shown += 1
             posed += result.pose is not None
-    finally:
-        sink.close()
-    if shown == 0:
-        raise ArgumentError("no frame could be read", field="input")
+        if shown == 0:
+            raise ArgumentError("no frame could be read", field="input")
+    except BaseException:
+        sink.discard()  # nothing of a run that failed half-way (an output there before: untouched)
+        raise
+    sink.commit()
     print(f"{shown} frames, a pose in {posed}")
     _print_timings(timings)
     print(f"wrote {sink.describe()}")
@@ -397,14 +439,16 @@ def cmd_bench(args) -> int:
 
 def cmd_compare(args) -> int:
     from .api import compare
-    from .imageio import check_output_path, read_image
+    from .imageio import read_image
+    from .outputs import check_output
 
-    if args.diff:
-        check_output_path(Path(args.diff), (".png",))
-    a, b = read_image(args.test), read_image(args.reference)
-    result = compare(a, b)
     ref = Path(args.reference)
     stderr_path = Path(args.stderr) if args.stderr else ref.with_name(ref.stem + ".stderr" + ref.suffix)
+    if args.diff:
+        check_output(args.diff, (".png",), inputs=[args.test, ref, stderr_path], overwrite=args.overwrite,
+                     field="--diff")  # fmt: skip
+    a, b = read_image(args.test), read_image(args.reference)
+    result = compare(a, b)
     if args.stderr or stderr_path.is_file():
         from .metrics import zscores
 
@@ -496,12 +540,13 @@ def cmd_demo(args) -> int:
 
 def cmd_fit_ltc(args) -> int:
     from .arealights.ltc_fit import fit_ltc
+    from .outputs import check_output
 
-    out = Path(args.output)
-    if out.suffix != ".npz":
-        raise ArgumentError(f"'{out}': an LTC table is written as .npz", field="-o")
+    params = _params(args.param)
+    measured = [str(params["file"])] if "file" in params else []  # a measured BRDF's table
+    out = check_output(args.output, (".npz",), inputs=measured, overwrite=args.overwrite)
     progress = None if args.quiet else (lambda i, n: print(f"\r  view angle {i}/{n}", end="", file=sys.stderr))
-    table = fit_ltc(args.brdf, _params(args.param), args.size, progress=progress)
+    table = fit_ltc(args.brdf, params, args.size, progress=progress)
     if progress is not None:
         print(file=sys.stderr)
     options = [f"--param {p}" for p in args.param] + ([f"--size {args.size}"] if args.size else [])
@@ -517,15 +562,13 @@ def cmd_fit_ltc(args) -> int:
 
 
 def cmd_scratch_brdf(args) -> int:
-    from .imageio import check_output_path
+    from .outputs import check_output
     from .scratches import build_table, plot_table
 
-    out = Path(args.output)
-    if out.suffix != ".npz":
-        raise ArgumentError(f"'{out}': a scratch BRDF table is written as .npz", field="-o")
+    profile = [args.profile[5:]] if args.profile.startswith("file:") else []
+    out = check_output(args.output, (".npz",), inputs=profile, overwrite=args.overwrite)
     plot = Path(args.plot) if args.plot else out.with_suffix(".png")
-    check_output_path(out, allowed=(".npz",))
-    check_output_path(plot, allowed=(".png",))
+    check_output(plot, (".png",), inputs=profile, overwrite=args.overwrite, field="--plot")
     conductor = None
     if args.conductor:
         eta, k = args.conductor[: len(args.conductor) // 2], args.conductor[len(args.conductor) // 2 :]
@@ -581,6 +624,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--exposure", type=float, default=0.0, help="PNG only: exposure in stops (default 0)")
     p.add_argument("--tonemap", choices=["srgb", "aces"], default="srgb", help="PNG only: tone curve")
     p.add_argument("--bit-depth", type=int, choices=[8, 16], default=8, help="PNG only: bits per channel (default 8)")
+    _overwrite_option(p)
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("view", help="interactive window over the persistent renderer (orbit, pick, edit, compare)")
@@ -595,6 +639,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--stats", help="write the frame times, event latencies and status as JSON when the viewer exits")
     p.add_argument("--exposure", type=float, default=0.0, help="exposure in stops (default 0)")
     p.add_argument("--tonemap", choices=["srgb", "aces"], default="srgb", help="tone curve (default srgb)")
+    _overwrite_option(p)
     p.set_defaults(func=cmd_view)
 
     p = sub.add_parser("highlights", help="potential highlight curves of a mesh's orientation field (ℓ per vertex)")
@@ -602,6 +647,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mesh", type=int, required=True, help="index of the mesh in the scene")
     p.add_argument("--light", type=int, help="index of the point or directional light (default: the first)")
     p.add_argument("-o", "--output", required=True, help="output .npz: positions, normals, u, h, ell, degenerate")
+    _overwrite_option(p)
     p.set_defaults(func=cmd_highlights)
 
     p = sub.add_parser("edit-highlights", help="solve a mesh's orientation field for target highlight tangents")
@@ -609,16 +655,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mesh", type=int, required=True, help="index of the mesh in the scene")
     p.add_argument("--targets", help=".npz: ell (V, 3; zero rows: no target) and mask (V,) bool")
     p.add_argument(
-        "--strokes", help="JSON list of strokes (tool bend | expand, centre, radius, stroke) applied in turn"
+        "--strokes",
+        help="JSON list of up to 256 strokes (tool bend | expand | stencil, centre, radius, stroke) applied in turn",
     )
     p.add_argument("--light", type=int, help="index of the point or directional light (default: the first)")
-    p.add_argument("--iterations", type=int, default=20, help="Levenberg–Marquardt iterations at most (20)")
+    p.add_argument("--iterations", type=int, default=20, help="Levenberg–Marquardt iterations at most (20; 1..1000)")
     p.add_argument("-o", "--output", required=True, help="output .npz: u (V, 3, the mesh's coordinates), energy")
+    _overwrite_option(p)
     p.set_defaults(func=cmd_edit_highlights)
 
     p = sub.add_parser("export-gltf", help="the scene as binary glTF (.glb): meshes with tangents, materials, lights")
     p.add_argument("scene", help="scene file (.toml)")
     p.add_argument("-o", "--output", required=True, help="output .glb")
+    _overwrite_option(p)
     p.set_defaults(func=cmd_export_gltf)
 
     p = sub.add_parser("ar", help="augmented reality: marker boards and tracking (the 'ar' extra)")
@@ -631,17 +680,20 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--size", type=float, default=0.05, help="marker side in board units (default 0.05: metres)")
     q.add_argument("--gap", type=float, default=0.0125, help="space between markers")
     q.add_argument("--dictionary", default="DICT_6X6_250", help="OpenCV ArUco dictionary")
+    _overwrite_option(q)
     q.set_defaults(func=cmd_ar_board)
     q = ar.add_parser("track", help="camera poses of images of a board: poses.json")
     q.add_argument("images", nargs="+", help="images (in order: a pose is kept a few frames when the board is lost)")
     q.add_argument("--intrinsics", required=True, help="camera.json: K, dist, size")
     q.add_argument("--board", required=True, help="board.json")
     q.add_argument("-o", "--output", required=True, help="poses.json")
+    _overwrite_option(q)
     q.set_defaults(func=cmd_ar_track)
     q = ar.add_parser("calibrate", help="camera intrinsics from images of a board: camera.json (K, dist, size)")
     q.add_argument("images", nargs="+", help="images of the board, one size, from varied and tilted viewpoints")
     q.add_argument("--board", required=True, help="board.json")
     q.add_argument("-o", "--output", required=True, help="camera.json")
+    _overwrite_option(q)
     q.set_defaults(func=cmd_ar_calibrate)
     for name, helptext in (
         ("composite", "virtual objects lit by the captured environment, composited into a photograph: out.png"),
@@ -672,6 +724,7 @@ def build_parser() -> argparse.ArgumentParser:
         q.add_argument("--environment", help="an HDR equirect light probe instead of the capture")
         q.add_argument("--supersample", type=int, default=2, help="s × s subpixels per pixel (1-4, default 2)")
         q.add_argument("--method", help="the renderer's method in the differential mode (default auto)")
+        _overwrite_option(q)
 
     p = sub.add_parser("reference", help="ground-truth Monte Carlo render (NumPy or Mitsuba 3)")
     p.add_argument("scene", nargs="+", help="scene file (.toml), or a glTF (.gltf, .glb) or OBJ (.obj + .mtl) file; "
@@ -680,8 +733,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="output image (.exr or .npy; the standard error goes to NAME.stderr.exr), "
                    "or an existing folder: STEM.exr per scene and references.json, the content key of each (a "
                    "scene run again whose key has not changed is kept)")  # fmt: skip
-    p.add_argument("--overwrite", action="store_true", help="a batch: replace the images in the folder that its "
-                   "references.json does not say were made from these scenes and parameters")  # fmt: skip
+    p.add_argument("--overwrite", action="store_true", help="replace an existing output image; a batch: the images "
+                   "in the folder that its references.json does not say were made from these scenes and parameters")
     p.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument(
@@ -729,6 +782,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="reference's per-pixel standard error (default: REFERENCE.stderr.exr if it exists); "
         "adds mean_z, mean_abs_z, within_3_stderr",
     )
+    _overwrite_option(p)
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("fit-ltc", help="fit a linearly-transformed-cosine table to a BRDF (for --method ltc)")
@@ -749,6 +803,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--size", type=int, help="entries per axis (default 64 for a family, 32 for one material)")
     p.add_argument("-o", "--output", required=True, help="output table (.npz)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress")
+    _overwrite_option(p)
     p.set_defaults(func=cmd_fit_ltc)
 
     p = sub.add_parser("scratch-brdf", help="precompute the BRDF table of a scratch profile (2D ray tracing)")
@@ -762,6 +817,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--backend", choices=["numpy", "gpu"], default="numpy", help="gpu: the compute shader")
     p.add_argument("-o", "--output", required=True, help="output table (.npz)")
     p.add_argument("--plot", help="plot of the table (default: the output with .png)")
+    _overwrite_option(p)
     p.set_defaults(func=cmd_scratch_brdf)
 
     p = sub.add_parser("info", help="OpenGL driver, methods and package versions")

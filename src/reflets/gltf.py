@@ -26,8 +26,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import OutputError
-
 ANISOTROPY = "KHR_materials_anisotropy"
 SPECULAR = "KHR_materials_specular"
 LIGHTS = "KHR_lights_punctual"
@@ -319,17 +317,15 @@ def _gltf_camera(g, cam, boxes: np.ndarray):
 
 
 def export_gltf(scene, path: str | Path, overwrite: bool = False) -> tuple[Path, list[str]]:
-    """Write ``scene`` as a .glb (atomically; an existing file — the scene's own input among them — is refused
-    unless ``overwrite``); returns the path and the approximations made (one line each)."""
+    """Write ``scene`` as a .glb (atomically; an existing file is refused unless ``overwrite``, one of the scene's
+    own input files always); returns the path and the approximations made (one line each)."""
     import pygltflib as g
 
-    from .imageio import atomic_write, check_output_path
+    from .outputs import atomic_write, check_output
     from .scene.assets import LUMINOUS_EFFICACY
     from .scene.geometry import bounding_boxes, mesh_data, mesh_scale
 
-    path = check_output_path(path, (".glb",))
-    if path.exists() and not overwrite:
-        raise OutputError("exists already; choose another name (nothing was written)", file=path)
+    path = check_output(path, (".glb",), inputs=scene.input_files(), overwrite=overwrite)
     notes: list[str] = []
     blob = bytearray()
     views, accessors = [], []

@@ -132,9 +132,10 @@ class GltfFile:
                 stamp.append((str(target), None, None))
         return tuple(stamp)
 
-    def external_files(self) -> list[Path]:
-        """The files the document's buffers and images name by uri (not data: URIs), resolved."""
-        uris = [item.uri for item in (*(self.doc.buffers or []), *(self.doc.images or [])) if item.uri]
+    def external_files(self, images: bool = True) -> list[Path]:
+        """The files the document's buffers (and ``images``) name by uri (not data: URIs), resolved."""
+        items = (*(self.doc.buffers or []), *((self.doc.images or []) if images else ()))
+        uris = [item.uri for item in items if item.uri]
         return [self._uri_path(uri) for uri in uris if not uri.startswith("data:")]
 
     def _uri_path(self, uri: str) -> Path:
@@ -289,9 +290,9 @@ class GltfFile:
     def _draco(self, draco: dict, where: str) -> tuple[dict[str, np.ndarray], np.ndarray]:
         try:
             import DracoPy
-        except ImportError:  # pragma: no cover - a dependency
-            raise SceneError(f"{where}: KHR_draco_mesh_compression needs DracoPy (pip install DracoPy)",
-                             file=self.path) from None  # fmt: skip
+        except ImportError:  # a dependency of reflets (pyproject.toml), but an environment may lack it
+            raise SceneError(f"{where}: KHR_draco_mesh_compression needs DracoPy, a dependency of reflets missing "
+                             "here; install it (pip install DracoPy)", file=self.path) from None  # fmt: skip
         data, offset, _ = self.buffer_view(
             draco.get("bufferView", -1), where + ".extensions.KHR_draco_mesh_compression"
         )

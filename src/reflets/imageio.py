@@ -14,24 +14,21 @@ OpenEXR and Pillow are imported inside the functions that need them, so importin
 
 from __future__ import annotations
 
-import contextlib
 import io
 import math
-import os
-import secrets
 from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
 
 from reflets.errors import ArgumentError, ImageError, OutputError
+from reflets.outputs import atomic_write, check_output_path
 
 __all__ = [
     "IMAGE_READ_EXTENSIONS",
     "IMAGE_WRITE_EXTENSIONS",
     "PNG_BIT_DEPTHS",
     "TONEMAP_MODES",
-    "check_output_path",
     "linear_to_srgb",
     "read_image",
     "srgb_to_linear",
@@ -467,51 +464,6 @@ def _encode_rgbe(rgb: np.ndarray) -> bytes:
 # ------------------------------------------------------------------------------------------------ writing
 
 
-def check_output_path(path: str | Path, allowed: Iterable[str] = IMAGE_WRITE_EXTENSIONS) -> Path:
-    """Check that ``path`` could be written, without creating anything.
-
-    Meant to run before an expensive render so that a typo in the output path fails in milliseconds, not after
-    minutes of work. Checks the extension (case-insensitive) against ``allowed``, that ``path`` is not a
-    directory, and that its parent directory exists and is writable.
-
-    Returns
-    -------
-    Path
-        ``path`` as a :class:`~pathlib.Path`.
-
-    Raises
-    ------
-    OutputError
-        Naming the path and what is allowed.
-    """
-    p = Path(path)
-    allowed = (allowed,) if isinstance(allowed, str) else allowed
-    allowed = tuple(a.lower() if a.startswith(".") else f".{a.lower()}" for a in allowed)
-    ext = _extension(p)
-    if ext not in allowed:
-        raise OutputError(
-            f"unsupported output extension {ext or '(none)'!r}; allowed: {_allowed_text(allowed)}", file=p
-        )
-    if p.is_dir():
-        raise OutputError("is a directory; give a file name", file=p)
-    parent = p.parent
-    if not parent.exists():
-        raise OutputError(f"directory '{parent}' does not exist; create it first", file=p)
-    if not parent.is_dir():
-        raise OutputError(f"'{parent}' is not a directory", file=p)
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise OutputError(f"directory '{parent}' is not writable", file=p)
-    return p
-
-
-def check_not_input(path: str | Path, inputs: Iterable[str | Path]) -> None:
-    """Refuse an output that would replace one of the files the work reads (the scene, its meshes, textures,
-    maps): an OutputError naming it, before anything is written."""
-    target = Path(path).resolve()
-    if any(target == Path(i).resolve() for i in inputs):
-        raise OutputError("is one of the scene's own input files; give the output another name", file=path)
-
-
 def write_image(
     path: str | Path, image: np.ndarray, *, exposure: float = 0.0, tonemap: str = "srgb", bit_depth: int = 8
 ) -> Path:
@@ -549,7 +501,7 @@ def write_image(
     ArgumentError
         The image has a bad shape or non-finite values, or exposure/tonemap are invalid.
     """
-    p = check_output_path(path)
+    p = check_output_path(path, IMAGE_WRITE_EXTENSIONS)
     rgb = _as_rgb(image, file=p)
     stops = _check_exposure(exposure, file=p)
     curve = _check_tonemap(tonemap, file=p)
@@ -596,33 +548,6 @@ def _encode_png(codes: np.ndarray) -> bytes:
 
         Image.fromarray(codes).save(buf, format="PNG")
     return buf.getvalue()
-
-
-def atomic_write(path: Path, payload: bytes) -> None:
-    """Write ``payload`` to a temporary sibling of ``path``, then rename it over ``path``.
-
-    The temporary file lives in the same directory so that :func:`os.replace` is a same-filesystem rename,
-    which is atomic on POSIX and Windows. It is created with mode 0o666 so that the umask applies as for any
-    new file.
-    """
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(6)}.tmp")
-    try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-    except OSError as exc:
-        reason = exc.strerror or exc
-        raise OutputError(f"cannot create a file in '{path.parent}' ({reason})", file=path) from exc
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(payload)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException as exc:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        if isinstance(exc, OSError):
-            raise OutputError(f"cannot write file ({exc.strerror or exc})", file=path) from exc
-        raise
 
 
 def write_png8(path: str | Path, rgb8: np.ndarray) -> Path:

@@ -21,7 +21,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["dumps", "finite_or_none", "write"]
+__all__ = ["dumps", "finite_or_none", "read", "write"]
+
+#: the largest JSON input read (a board, camera intrinsics, strokes, an event script: kilobytes in real use)
+MAX_JSON_BYTES = 16 << 20
 
 
 def finite_or_none(obj: Any) -> Any:
@@ -68,8 +71,49 @@ def dumps(obj: Any, **kw: Any) -> str:
 def write(path: str | Path, obj: Any, **kw: Any) -> Path:
     """Write :func:`dumps` of ``obj`` (UTF-8) to ``path`` atomically (a failed write leaves what was there);
     returns the path."""
-    from .imageio import atomic_write
+    from .outputs import atomic_write
 
     path = Path(path)
     atomic_write(path, dumps(obj, **kw).encode("utf-8"))
     return path
+
+
+def _no_duplicate_keys(pairs: list[tuple[str, Any]]) -> dict:
+    keys = [k for k, _ in pairs]
+    if len(set(keys)) != len(keys):
+        twice = sorted({k for k in keys if keys.count(k) > 1})
+        raise ValueError(f"key {twice[0]!r} is given twice (JSON keeps only the last: say it once)")
+    return dict(pairs)
+
+
+def _no_constant(name: str) -> None:
+    raise ValueError(f"{name} is not JSON (numbers must be finite)")
+
+
+def read(path: str | Path, *, field: str | None = None, what: str = "a JSON file") -> Any:
+    """A JSON input file's content, strictly: duplicate keys, NaN / Infinity, more than MAX_JSON_BYTES or
+    nesting deeper than Python's stack are refused — each as one :class:`~reflets.errors.ArgumentError` naming
+    the file and the option (``field``) that gave it, as are a missing file, a directory and bytes that are not
+    UTF-8. What the content must be is its reader's check (a pydantic model: ``reflets.arguments.validated``)."""
+    from .errors import ArgumentError
+
+    path = Path(path)
+    try:
+        if path.is_dir():
+            raise ArgumentError(f"is a directory, expected {what}", file=path, field=field)
+        size = path.stat().st_size
+        if size > MAX_JSON_BYTES:
+            raise ArgumentError(f"is {size:,} bytes; {what} is at most {MAX_JSON_BYTES:,}", file=path, field=field)
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ArgumentError("file not found", file=path, field=field) from None
+    except UnicodeDecodeError:
+        raise ArgumentError(f"not a text file (expected {what}: UTF-8 JSON)", file=path, field=field) from None
+    except OSError as exc:
+        raise ArgumentError(f"cannot read ({exc.strerror or type(exc).__name__})", file=path, field=field) from None
+    try:
+        return json.loads(text, object_pairs_hook=_no_duplicate_keys, parse_constant=_no_constant)
+    except RecursionError:
+        raise ArgumentError(f"values nested too deeply (not {what})", file=path, field=field) from None
+    except ValueError as exc:  # json.JSONDecodeError is one
+        raise ArgumentError(f"not {what} ({exc})", file=path, field=field) from None

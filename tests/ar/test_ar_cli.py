@@ -126,7 +126,7 @@ def test_a_short_video_round_trips(tmp_path):
     sink = FrameSink.open(str(tmp_path / "clip.avi"))
     for frame in frames:
         sink.write(frame)
-    sink.close()
+    sink.commit()
     back = list(FrameSource.open([str(tmp_path / "clip.avi")], None).frames())
     assert len(back) == 3
     for a, b in zip(back, frames, strict=True):
@@ -142,8 +142,64 @@ def test_run_on_a_synthetic_video(files, capsys):
     sink = FrameSink.open(str(folder / "clip.avi"))
     for name in frames:
         sink.write(np.asarray(Image.open(name).convert("RGB")))
-    sink.close()
+    sink.commit()
     out = folder / "clip_out.avi"
     assert main(["ar", "run", str(folder / "objects.toml"), str(folder / "clip.avi"), *_common(folder),
                  "-o", str(out)]) == 0  # fmt: skip
     assert "3 frames, a pose in 3" in capsys.readouterr().out and out.stat().st_size > 0
+
+
+def test_a_run_that_fails_half_way_leaves_nothing(files, capsys, tmp_path, monkeypatch):
+    """A frame that cannot be decoded after good ones: the frames written so far are not kept (the output is
+    written under a temporary name and moved into place only when the run ends well). The frames are passed
+    through unchanged (the session's work is not what this checks)."""
+    import types
+
+    from reflets import cli
+
+    passed = types.SimpleNamespace(composite=None, pose=None, timings={})
+    monkeypatch.setattr(cli, "_ar_session", lambda *a: types.SimpleNamespace(process=lambda frame: passed))
+    folder, frames = files
+    truncated = tmp_path / "truncated.png"
+    truncated.write_bytes((folder / "frame1.png").read_bytes()[:2000])
+    out = tmp_path / "frames_out"
+    argv = ["ar", "run", str(folder / "objects.toml"), frames[0], str(truncated), *_common(folder), "-o", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "truncated.png" in err, err
+    assert list(tmp_path.iterdir()) == [truncated]
+
+
+def test_the_frame_sink_replaces_only_with_overwrite_and_only_a_folder_of_frames(tmp_path):
+    from reflets.ar.video import FrameSink
+    from reflets.errors import ArgumentError
+
+    frame = np.zeros((4, 6, 3), np.uint8)
+    out = tmp_path / "frames"
+    sink = FrameSink.open(str(out))
+    for _ in range(3):
+        sink.write(frame)
+    assert not out.exists()  # nothing under the output's name until the run ends well
+    sink.commit()
+    assert sorted(p.name for p in out.iterdir()) == [f"frame_0000{k}.png" for k in range(3)]
+    with pytest.raises(ArgumentError, match="exists already; give --overwrite"):
+        FrameSink.open(str(out))
+    sink = FrameSink.open(str(out), overwrite=True)
+    sink.write(frame)
+    sink.discard()  # a failed run: the folder there before untouched
+    assert len(list(out.iterdir())) == 3
+    sink = FrameSink.open(str(out), overwrite=True)
+    sink.write(frame)
+    sink.commit()
+    assert [p.name for p in out.iterdir()] == ["frame_00000.png"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["frames"]  # no temporary left
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(ArgumentError, match="holds files that are not frames"):
+        FrameSink.open(str(out), overwrite=True)
+    photo = tmp_path / "photo.mp4"
+    photo.write_bytes(b"input")
+    with pytest.raises(Exception, match="is one of the inputs"):
+        FrameSink.open(str(photo), overwrite=True, inputs=[str(photo)])
+    (tmp_path / "x.mp4").mkdir()
+    with pytest.raises(ArgumentError, match="is a folder; a video cannot replace it"):
+        FrameSink.open(str(tmp_path / "x.mp4"), overwrite=True)

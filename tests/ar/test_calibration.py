@@ -87,6 +87,6 @@ def test_the_calibrate_command_writes_camera_json_and_fails_in_one_line(views, t
 
     Image.fromarray(np.full_like(views[0], 128)).save(tmp_path / "blank.png")
     few = [names[0], str(tmp_path / "blank.png")]
-    assert main(["ar", "calibrate", *few, "--board", str(tmp_path / "board.json"), "-o", str(out)]) == 2
+    assert main(["ar", "calibrate", *few, "--board", str(tmp_path / "board.json"), "-o", str(out), "--overwrite"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "only 1 of 2 images" in err

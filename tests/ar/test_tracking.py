@@ -77,7 +77,7 @@ def test_the_commands_write_a_board_and_the_poses(tmp_path, capsys):
     position, degrees = pose_error(np.array(views[1]["R_world_to_cam"]), np.array(views[1]["t_world_to_cam"]), R, t)
     assert position < 0.005 and degrees < 0.5
     assert main(["ar", "track", names[0], "--intrinsics", str(tmp_path / "none.json"), "--board",
-                 str(tmp_path / "board.json"), "-o", str(out)]) == 2  # fmt: skip
+                 str(tmp_path / "board.json"), "-o", str(out), "--overwrite"]) == 2  # fmt: skip
     assert "none.json: --intrinsics: file not found" in capsys.readouterr().err
     assert main(["ar", "board", "-o", str(tmp_path / "b.json"), "--dictionary", "DICT_NOPE"]) == 2
 

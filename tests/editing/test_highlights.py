@@ -36,9 +36,9 @@ def test_the_command_writes_the_arrays_and_refuses_bad_input(tmp_path, capsys):
     assert main(["highlights", str(TEAPOT), "--mesh", "0", "-o", str(out)]) == 0
     with np.load(out) as data:
         assert {"positions", "normals", "u", "h", "ell", "degenerate"} <= set(data.files)
-    assert main(["highlights", str(TEAPOT), "--mesh", "9", "-o", str(out)]) == 2
+    assert main(["highlights", str(TEAPOT), "--mesh", "9", "-o", str(out), "--overwrite"]) == 2
     assert "no mesh[9]" in capsys.readouterr().err
-    assert main(["highlights", str(TEAPOT), "--mesh", "0", "--light", "1", "-o", str(out)]) == 2
+    assert main(["highlights", str(TEAPOT), "--mesh", "0", "--light", "1", "-o", str(out), "--overwrite"]) == 2
     assert "not a point or directional light" in capsys.readouterr().err
     assert main(["highlights", str(TEAPOT), "--mesh", "0", "-o", str(tmp_path / "x.png")]) == 2
 

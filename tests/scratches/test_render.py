@@ -3,10 +3,13 @@ scratch scenes."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
-from reflets.errors import ArgumentError
+import reflets
+from reflets.errors import ArgumentError, RefletsWarning
 from reflets.scene import load_dict, load_scene
 from reflets.scene.environment import environment_grid, load_environment, lookup
 from reflets.scratches import shading
@@ -96,12 +99,20 @@ def test_alpha_zero_renders_the_base_like_forward(ctx, tmp_path):
     np.testing.assert_allclose(images[0], images[1], rtol=1e-4, atol=1e-6)
 
 
-def test_spp_must_be_a_multiple_of_samples(ctx, tmp_path):
-    tech = get_technique("scratches")(ctx, samples=4)
-    tech.prepare(load_dict(_plate(tmp_path, MATERIAL), base_dir=tmp_path))
-    with pytest.raises(ArgumentError, match="multiple of samples"):
-        tech.render(spp=6)
-    tech.release()
+def test_spp_short_of_a_frame_is_rounded_up_with_one_note(ctx, tmp_path):
+    """``reflets.render(scene, spp=1)`` of a scratched plate under a point light alone: the image of one whole frame
+    (spp = samples = 8) and one note saying so, which speaks of no environment (the scene has none)."""
+    data = _plate(tmp_path, {**MATERIAL, "profile": "quartic:0.4", "alpha_size": 16})  # a mirror peak: no warning
+    data["camera"]["size"], data["light"] = [16, 12], data["light"][:1]
+    scene = load_dict(data, base_dir=tmp_path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        one = reflets.render(scene, spp=1)
+    said = [str(w.message) for w in caught if issubclass(w.category, RefletsWarning)]
+    assert len(said) == 1 and "spp 1 rounded up to 8" in said[0] and "environment" not in said[0], said
+    np.testing.assert_array_equal(one, reflets.render(scene, spp=8))
+    with pytest.raises(ArgumentError, match="spp"):
+        reflets.render(scene, spp=0)
 
 
 @pytest.mark.parametrize("name", ["50_brushed_plate.toml", "51_scratched_plate.toml", "52_scratched_teapot.toml"])

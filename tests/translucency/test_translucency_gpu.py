@@ -174,7 +174,8 @@ def test_cli_terms_and_lighting_errors(tmp_path, capsys):
          "--param", "terms=single,multiple", "-o", str(out)]
     )  # fmt: skip
     assert code == 0 and out.exists()
-    code = main(["render", str(scenes("04_bunny_arealight.toml")), "--method", "translucent", "-o", str(out)])
+    code = main(["render", str(scenes("04_bunny_arealight.toml")), "--method", "translucent", "-o", str(out),
+                 "--overwrite"])  # fmt: skip
     err = capsys.readouterr().err
     assert code == 2 and "exactly one point or directional light" in err and "Traceback" not in err
 

@@ -260,7 +260,7 @@ def test_cli_reference_volumetric_engine(tmp_path, capsys):
     expected = render_volumetric(reflets.load_scene(scene_file), spp=2, seed=0, workers=2, progress=False)
     np.testing.assert_allclose(image, expected.image, rtol=1e-6)
     assert stderr.shape == (12, 16, 3) and np.all(stderr[expected.mask] >= 0)
-    assert main([*args, "--visibility", "off"]) == 2
-    assert main([*args, "--workers", "0"]) == 2
+    assert main([*args, "--visibility", "off", "--overwrite"]) == 2
+    assert main([*args, "--workers", "0", "--overwrite"]) == 2
     err = capsys.readouterr().err
     assert "pixel centres with shadows" in err and "workers must be at least 1" in err and "Traceback" not in err

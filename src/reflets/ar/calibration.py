@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ArgumentError
-from .board import Board, _aruco
+from .board import Board, _aruco, opencv_errors
 from .camera import Intrinsics
 from .tracking import detect
 
@@ -70,9 +70,14 @@ def calibrate(
             f"only {len(object_points)} of {len(images)} images show {MIN_MARKERS} or more of the board's markers; "
             f"calibration needs {MIN_VIEWS} such views at least (varied, tilted)"
         )
-    try:
+    with opencv_errors("calibrate from these views", field="images"):
         rms, K, dist, _, _ = cv2.calibrateCamera(object_points, image_points, size, None, None)
-    except cv2.error as exc:
-        message = str(exc).strip().splitlines()[-1]
-        raise ArgumentError(f"OpenCV could not calibrate from these views ({message})") from None
-    return Calibration(Intrinsics(K, np.asarray(dist, np.float64).ravel()[:5], size), float(rms), markers)
+    try:  # a fit that diverged (NaN, a negative focal length) is no camera
+        intrinsics = Intrinsics.checked(K, np.asarray(dist, np.float64).ravel()[:5], size)
+    except ArgumentError as exc:
+        raise ArgumentError(f"the views give no usable camera ({exc.message}); take more views, varied and tilted",
+                            field="images") from None  # fmt: skip
+    if not np.isfinite(rms):
+        raise ArgumentError(f"the fit's reprojection error is {rms}; take more views, varied and tilted",
+                            field="images")  # fmt: skip
+    return Calibration(intrinsics, float(rms), markers)

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .board import Board, _aruco
+from .board import Board, _aruco, opencv_errors
 from .camera import Intrinsics
 
 #: frames a pose is kept after the board is lost
@@ -23,13 +23,15 @@ class Pose:
     markers: int  # how many markers it was solved from (0: kept from an earlier frame)
 
 
-def detect(image: np.ndarray, board: Board) -> tuple[np.ndarray, np.ndarray]:
-    """The board's markers in a grey image: their 3D corners (N × 4, 3) and image corners (N × 4, 2)."""
+def detect(image: np.ndarray, board: Board, name: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The board's markers in a grey image: their 3D corners (N × 4, 3) and image corners (N × 4, 2); ``name``
+    labels the image in errors."""
     cv2 = _aruco()
     parameters = cv2.aruco.DetectorParameters()
     parameters.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
-    detector = cv2.aruco.ArucoDetector(board.cv_dictionary(), parameters)
-    corners, ids, _ = detector.detectMarkers(image)
+    with opencv_errors("detect markers", **({"file": name} if name is not None else {"field": "image"})):
+        detector = cv2.aruco.ArucoDetector(board.cv_dictionary(), parameters)
+        corners, ids, _ = detector.detectMarkers(image)
     world, pixels = [], []
     for c, marker in zip(corners, [] if ids is None else ids.ravel(), strict=False):
         if int(marker) in board.markers:
@@ -41,14 +43,23 @@ def detect(image: np.ndarray, board: Board) -> tuple[np.ndarray, np.ndarray]:
 
 
 def solve_pose(world: np.ndarray, pixels: np.ndarray, intrinsics: Intrinsics) -> Pose | None:
+    """The pose from the markers' corners; None: too few, or a view PnP cannot solve — SQPnP asserts (cv2.error)
+    when the corners' undistorted rays are too close together to tell a pose, a frame without a pose, not a
+    failure of the whole input (the board and the intrinsics were checked where they were read)."""
     cv2 = _aruco()
     if len(world) < 4:
         return None
-    ok, rvec, tvec = cv2.solvePnP(world, pixels, intrinsics.K, intrinsics.dist, flags=cv2.SOLVEPNP_SQPNP)
-    if not ok:
+    try:
+        ok, rvec, tvec = cv2.solvePnP(world, pixels, intrinsics.K, intrinsics.dist, flags=cv2.SOLVEPNP_SQPNP)
+        if not ok:
+            return None
+        rvec, tvec = cv2.solvePnPRefineLM(world, pixels, intrinsics.K, intrinsics.dist, rvec, tvec)
+        R = cv2.Rodrigues(rvec)[0]
+    except cv2.error:
         return None
-    rvec, tvec = cv2.solvePnPRefineLM(world, pixels, intrinsics.K, intrinsics.dist, rvec, tvec)
-    return Pose(cv2.Rodrigues(rvec)[0], tvec.ravel(), len(world) // 4)
+    if not (np.all(np.isfinite(R)) and np.all(np.isfinite(tvec))):
+        return None
+    return Pose(R, tvec.ravel(), len(world) // 4)
 
 
 class Tracker:
@@ -60,10 +71,11 @@ class Tracker:
         self._last: Pose | None = None
         self._lost = 0
 
-    def update(self, image: np.ndarray, timings: dict[str, float] | None = None) -> Pose | None:
-        """The pose of a grey image; ``timings`` receives detect_ms and pose_ms."""
+    def update(self, image: np.ndarray, timings: dict[str, float] | None = None,
+               name: str | None = None) -> Pose | None:  # fmt: skip
+        """The pose of a grey image; ``timings`` receives detect_ms and pose_ms; ``name`` labels errors."""
         t0 = time.perf_counter()
-        markers = detect(image, self.board)
+        markers = detect(image, self.board, name)
         t1 = time.perf_counter()
         pose = solve_pose(*markers, self.intrinsics)
         if timings is not None:
@@ -78,10 +90,13 @@ class Tracker:
         return pose
 
 
-def track(images, board: Board, intrinsics: Intrinsics) -> list[Pose | None]:
-    """A pose per image (None before the board is first seen, or after it is lost for over KEEP_FRAMES)."""
+def track(images, board: Board, intrinsics: Intrinsics, names=None) -> list[Pose | None]:
+    """A pose per image (None before the board is first seen, or after it is lost for over KEEP_FRAMES);
+    ``names`` label the images in errors."""
     tracker = Tracker(board, intrinsics)
-    return [tracker.update(image) for image in images]
+    if names is None:
+        return [tracker.update(image) for image in images]
+    return [tracker.update(image, name=str(name)) for image, name in zip(images, names, strict=True)]
 
 
 def pose_error(R: np.ndarray, t: np.ndarray, R_true: np.ndarray, t_true: np.ndarray) -> tuple[float, float]:

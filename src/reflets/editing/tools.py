@@ -15,9 +15,24 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import LinearNDInterpolator
+from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
+from scipy.spatial import QhullError
 
 from .surface import SurfaceMesh
+
+#: the smallest part of a stroke's direction along the surface, relative to its length, that orients a brush
+#: (below it the stroke runs along the normal: its y axis would be rounding noise, or NaN for the zero vector)
+MIN_TANGENTIAL = 1e-3
+
+
+class BrushError(ValueError):
+    """A brush that cannot be placed on the mesh (its centre off the surface, its stroke along the normal): the
+    caller names the stroke it came from (``strokes.EditSession.brush``)."""
+
+
+def _vector(v) -> str:
+    """A point or direction as a message shows it: [x, y, z], six digits each."""
+    return "[" + ", ".join(f"{x:.6g}" for x in np.asarray(v, np.float64)) + "]"
 
 
 @dataclass
@@ -29,17 +44,39 @@ class Brush:
     radius: float
     stroke: np.ndarray
 
-    def frame(self, mesh: SurfaceMesh) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(origin, x axis, y axis, normal) of the brush's plane."""
-        nearest = int(np.argmin(np.linalg.norm(mesh.positions - np.asarray(self.centre), axis=1)))
+    def frame(self, mesh: SurfaceMesh, oriented: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(origin, x axis, y axis, normal) of the brush's plane, at the vertex nearest the centre (a brush
+        smaller than the triangles there holds that vertex alone). A centre off the mesh (farther from that vertex
+        than the radius and its longest edge), or (``oriented``: a warp's) a stroke along the normal, is a
+        BrushError; unoriented (the stencil reads only distances), a stroke along the normal takes the vertex's
+        tangent instead."""
+        distances = np.linalg.norm(mesh.positions - np.asarray(self.centre), axis=1)
+        nearest = int(np.argmin(distances))
+        ring = mesh.positions[mesh.edges[mesh.edges[:, 0] == nearest, 1]] - mesh.positions[nearest]
+        reach = self.radius + float(np.linalg.norm(ring, axis=1).max(initial=0.0))
+        if distances[nearest] > reach:
+            raise BrushError(
+                f"centre {_vector(self.centre)} is off the mesh: {distances[nearest]:.4g} from its nearest vertex, "
+                f"more than the radius and the edges there ({reach:.4g}); give a point on the surface"
+            )
         n = mesh.normals[nearest]
-        y = np.asarray(self.stroke, np.float64) - np.dot(self.stroke, n) * n
-        y /= np.linalg.norm(y)
+        stroke = np.asarray(self.stroke, np.float64)
+        stroke = stroke / max(float(np.abs(stroke).max(initial=0.0)), 1e-300)  # no overflow nor underflow below
+        y = stroke - np.dot(stroke, n) * n
+        length = float(np.linalg.norm(y))
+        if length <= MIN_TANGENTIAL * float(np.linalg.norm(stroke)):  # the zero vector too
+            if oriented:
+                along = "is the zero vector" if not stroke.any() else f"runs along the surface normal {_vector(n)}"
+                raise BrushError(f"stroke {_vector(self.stroke)} {along}; give a direction along the surface")
+            y, length = mesh.t[nearest], 1.0
+        y = y / length
         return mesh.positions[nearest], np.cross(y, n), y, n
 
-    def coordinates(self, mesh: SurfaceMesh, margin: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    def coordinates(
+        self, mesh: SurfaceMesh, margin: float = 1.0, oriented: bool = True
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The vertices within ``margin`` × radius of the centre, and their (x, y) in the unit-disc plane."""
-        origin, ex, ey, _ = self.frame(mesh)
+        origin, ex, ey, _ = self.frame(mesh, oriented)
         d = mesh.positions - origin
         xy = np.stack([d @ ex, d @ ey], axis=1) / self.radius
         inside = np.linalg.norm(d, axis=1) < margin * self.radius
@@ -68,6 +105,8 @@ def expand(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
 
 
 WARPS = {"bend": bend, "expand": expand}
+#: every tool a stroke may name: the warps, and the stencil (which sets the field under the brush directly)
+TOOLS = (*WARPS, "stencil")
 
 
 def _inverse(warp, x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -90,10 +129,15 @@ def warp_targets(mesh: SurfaceMesh, ell: np.ndarray, brush: Brush, warp: str = "
     # ℓ in the brush's plane, by its doubled angle (ℓ and −ℓ are the same highlight), interpolated linearly
     lx, ly = ell[support] @ ex, ell[support] @ ey
     angle2 = 2.0 * np.arctan2(ly, lx)
-    interp = LinearNDInterpolator(xy[support], np.stack([np.cos(angle2), np.sin(angle2)], axis=1))
+    doubled_ell = np.stack([np.cos(angle2), np.sin(angle2)], axis=1)
+    try:
+        interp = LinearNDInterpolator(xy[support], doubled_ell)
+    except QhullError:  # fewer than 3 vertices, or all on a line (a brush about a triangle's size): no triangles
+        interp = NearestNDInterpolator(xy[support], doubled_ell)
     x, y = xy[inside, 0], xy[inside, 1]
     qy = _inverse(f, x, y)
     doubled = interp(np.stack([x, qy], axis=1))
+    carried = ~np.isnan(doubled).any(axis=1)  # q beyond the mesh's border: no ℓ to carry, so no target there
     theta = 0.5 * np.arctan2(doubled[:, 1], doubled[:, 0])
     d = np.stack([np.cos(theta), np.sin(theta)], axis=1)
     _, fx, fy = f(x, qy)
@@ -102,10 +146,12 @@ def warp_targets(mesh: SurfaceMesh, ell: np.ndarray, brush: Brush, warp: str = "
     # parameterisation used: a direction that the warp leaves alone comes back exactly)
     t, b = mesh.t[inside], mesh.b[inside]
     m = np.stack([np.stack([t @ ex, b @ ex], 1), np.stack([t @ ey, b @ ey], 1)], axis=1)  # P [t b], (N, 2, 2)
+    carried &= np.abs(np.linalg.det(m)) > 1e-9  # a tangent plane edge-on to the brush's: nothing maps back
+    m[~carried], pushed[~carried] = np.eye(2), 0.0  # so a zero row
     a = np.linalg.solve(m, pushed[..., None])[..., 0]
     world = a[:, :1] * t + a[:, 1:] * b
     targets = np.zeros_like(mesh.positions)
-    targets[inside] = world / np.maximum(np.linalg.norm(world, axis=1, keepdims=True), 1e-300)
+    targets[inside] = world / np.maximum(np.linalg.norm(world, axis=1, keepdims=True), 1e-300)  # 0: no target
     return targets, inside
 
 
@@ -115,7 +161,7 @@ def stencil(mesh: SurfaceMesh, phi: np.ndarray, h: np.ndarray, brush: Brush, smo
     there: the field jumps from the stencil to the surrounding one). Returns the new angles."""
     from .analysis import laplacian_step
 
-    near, xy = brush.coordinates(mesh, margin=1.15)
+    near, xy = brush.coordinates(mesh, margin=1.15, oriented=False)
     r = np.linalg.norm(xy, axis=1)
     inside = near & (r < 1.0)
     u = np.cross(h, mesh.normals)

@@ -85,7 +85,7 @@ _CENTRED_CAMERA = (("principal_offset", [0.0, 0.0]), ("pixel_aspect", 1.0), ("ne
 
 
 def save(path: Path, image, digest: str, description: dict, seconds: float) -> None:
-    from ..imageio import atomic_write
+    from ..outputs import atomic_write
 
     m = image.mask
     payload = {

@@ -28,7 +28,8 @@ What becomes what (docs/assets.md has the full table):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+import re
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
@@ -36,7 +37,6 @@ import numpy as np
 
 from ..errors import SceneError
 from ..gltf_file import GltfFile, read_gltf
-from ..quantities import MAX_MAGNITUDE
 from .meshdata import MeshData
 
 #: the file extensions that carry materials (and so may stand without ``material`` in a scene)
@@ -78,6 +78,24 @@ def is_asset(path: str | Path) -> bool:
     return Path(path).suffix.lower() in ASSET_EXTENSIONS
 
 
+#: an OBJ's ``mtllib`` and ``usemtl`` statements (the file's own materials), found without parsing its geometry
+_OBJ_MATERIAL_LINES = re.compile(rb"^[ \t]*(mtllib|usemtl)[ \t]+(\S[^\r\n]*?)[ \t]*\r?$", re.MULTILINE)
+
+
+def own_materials(path: str | Path) -> list[str]:
+    """The names of the materials a glTF file defines, or an OBJ file takes from its MTL libraries (none without
+    one): what a scene's ``material`` for the whole file replaces."""
+    path = Path(path)
+    if path.suffix.lower() == ".obj":
+        from .meshfile import decode_text
+
+        found = _OBJ_MATERIAL_LINES.findall(path.read_bytes())
+        if not any(kind == b"mtllib" for kind, _ in found):
+            return []
+        return list(dict.fromkeys(decode_text(name) for kind, name in found if kind == b"usemtl"))
+    return [m.name or f"material {i}" for i, m in enumerate(read_gltf(path).doc.materials or [])]
+
+
 def load_asset(path: str | Path) -> Asset:
     """Read a glTF file's parts, materials, cameras and lights (see the module docstring); an OBJ file's parts and
     MTL materials (``reflets.scene.obj_asset``)."""
@@ -93,8 +111,7 @@ def load_asset(path: str | Path) -> Asset:
     left_out: dict[str, list[str]] = {}  # what a material's feature becomes instead → the materials concerned
     materials = {names[i]: _material(gltf, i, warnings, left_out) for i in range(len(gltf.doc.materials or []))}
     for what, which in left_out.items():  # one line per feature, however many materials have it
-        listed = ", ".join(f"'{n}'" for n in which[:3]) + (f" and {len(which) - 3} more" if len(which) > 3 else "")
-        warnings.append(f"{gltf.path.name}: {what} (material{'s' if len(which) > 1 else ''} {listed})")
+        warnings.append(f"{gltf.path.name}: {what} (material{'s' if len(which) > 1 else ''} {listed(which)})")
     parts = []
     default_material = None
     for index, instance in enumerate(gltf.instances):
@@ -112,6 +129,12 @@ def load_asset(path: str | Path) -> Asset:
     cameras, lights = _cameras(gltf, warnings), _lights(gltf, warnings)
     warnings += gltf.warnings
     return Asset(path, parts, materials, cameras, lights, list(dict.fromkeys(warnings)))  # each line once
+
+
+def listed(names: list[str], shown: int = 3) -> str:
+    """``'a', 'b', 'c' and 4 more``: names in a one-line message, however many there are."""
+    more = f" and {len(names) - shown} more" if len(names) > shown else ""
+    return ", ".join(f"'{n}'" for n in names[:shown]) + more
 
 
 def _unique(name: str, taken) -> str:
@@ -427,64 +450,13 @@ def _spot(gltf: GltfFile, spot, where: str, forward: tuple[float, float, float])
 
 
 def part_mesh(path: str | Path, part: int) -> MeshData:
-    """One primitive instance of a glTF file in the file's world coordinates, with a full shading frame: the
-    file's normals (flat normals when it has none, as the specification requires), its tangents (else built from
-    the uv layout: ``compute_tangents``), its TEXCOORD_0 and TEXCOORD_1 (v flipped to reflets' v up)."""
-    from .meshfile import _unit, shaded_mesh, spherical_uv
-
+    """One part of a glTF or OBJ file (``FileMesh.part``) in the file's world coordinates, with a full shading frame
+    (``meshfile.gltf_part_mesh``, ``obj_asset.obj_part_mesh``); a whole file in one mesh is
+    ``meshfile.load_mesh_file``'s."""
     if Path(path).suffix.lower() == ".obj":
         from .obj_asset import obj_part_mesh
 
         return obj_part_mesh(Path(path), part)
-    gltf = read_gltf(path)
-    instances = gltf.instances
-    if not 0 <= part < len(instances):
-        raise SceneError(f"part {part} does not exist: the file has {len(instances)} primitive instances", file=path)
-    instance = instances[part]
-    prim = gltf.primitive(instance.mesh, instance.primitive)
-    where = f"meshes[{instance.mesh}].primitives[{instance.primitive}]"
-    if prim is None or len(prim.indices) == 0:
-        raise SceneError(f"{where}: no triangles", file=path)
-    pos, faces = prim.positions, prim.indices
-    normals, tangents, (uv, uv1) = prim.normals, prim.tangents, prim.uvs
-    if normals is None:  # flat: every triangle its own three vertices
-        corners = faces.ravel()
-        pos, faces = pos[corners], np.arange(len(corners)).reshape(-1, 3)
-        uv = uv[corners] if uv is not None else None
-        uv1 = uv1[corners] if uv1 is not None else None
-        tangents = None
-        face = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
-        normals = np.repeat(_unit(face)[0], 3, axis=0)
-    if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(normals))):
-        raise SceneError(f"{where}: non-finite vertex data", file=path)
-    mesh_uv = np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=1) if uv is not None else spherical_uv(pos)
-    normals, length = _unit(normals)
-    normals[length == 0] = (0.0, 1.0, 0.0)
-    if tangents is not None and not np.all(np.isfinite(tangents)):
-        tangents = None  # built from the uv layout
-    local = shaded_mesh(pos, normals, mesh_uv, faces, tangents)
-    if uv1 is not None:
-        local = replace(local, uvs1=np.stack([uv1[:, 0], 1.0 - uv1[:, 1]], axis=1).astype(np.float32))
-    world = local.transformed(instance.matrix)
-    extent = np.abs(world.positions).max()
-    if not np.isfinite(extent) or extent > MAX_MAGNITUDE:
-        raise SceneError(f"{where} placed by nodes[{instance.node}]: vertex coordinates up to {extent:.3g}, over "
-                         f"{MAX_MAGNITUDE:.0e}", file=path)  # fmt: skip
-    return world
+    from .meshfile import gltf_part_mesh
 
-
-def merged_mesh(path: Path) -> MeshData:
-    """Every primitive instance of a glTF file's default scene in one mesh (a material given in the scene)."""
-    count = len(read_gltf(path).instances)
-    parts = [part_mesh(path, k) for k in range(count)]
-    if not parts:
-        raise SceneError("contains no triangles (only points, lines or nothing)", file=path)
-    offsets = np.cumsum([0] + [p.n_vertices for p in parts[:-1]])
-    return MeshData(
-        positions=np.concatenate([p.positions for p in parts]),
-        normals=np.concatenate([p.normals for p in parts]),
-        tangents=np.concatenate([p.tangents for p in parts]),
-        uvs=np.concatenate([p.uvs for p in parts]),
-        indices=np.concatenate([p.indices + np.uint32(o) for p, o in zip(parts, offsets, strict=True)]),
-        uvs1=np.concatenate([p.uv_sets[:, 2:] for p in parts]) if any(p.uvs1 is not None for p in parts) else None,
-    )
+    return gltf_part_mesh(path, part)

@@ -86,11 +86,7 @@ def _build_mesh_data(scene: Scene, index: int) -> MeshData:
             from .assets import part_mesh
 
             local = part_mesh(scene.resolve(mesh.file), mesh.part)
-        elif isinstance(mesh, FileMesh) and mesh.file.suffix.lower() in (".gltf", ".glb"):
-            from .assets import merged_mesh  # reflets' reader: Draco, sparse and quantized data, node transforms
-
-            local = merged_mesh(scene.resolve(mesh.file))
-        elif isinstance(mesh, FileMesh):
+        elif isinstance(mesh, FileMesh):  # glTF by reflets' reader (Draco, sparse, quantized data), others by trimesh
             local = load_mesh_file(scene.resolve(mesh.file))
         else:
             _check_segments(mesh, index)

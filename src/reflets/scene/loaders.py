@@ -27,6 +27,7 @@ def load_scene(path: str | Path, camera: int | str | None = None, environment: s
     path = Path(path)
     if is_asset(path):
         return scene_from_asset(path, camera=camera, environment=environment)
+    _refuse_bare_mesh_file(path)
     if camera is not None or environment is not None:
         from ..errors import ArgumentError
 
@@ -48,6 +49,16 @@ def load_scene(path: str | Path, camera: int | str | None = None, environment: s
     except RecursionError:  # the parser recurses once per nested array or inline table
         raise SceneError(f"values nested too deeply (a scene needs at most {MAX_NESTING} levels)", file=path) from None
     return load_dict(data, base_dir=path.resolve().parent, source=path)
+
+
+def _refuse_bare_mesh_file(path: Path) -> None:
+    """A PLY, STL or OFF file carries no materials, so it is no scene by itself: said so, rather than that it is
+    not TOML."""
+    from .meshfile import SUPPORTED_EXTENSIONS
+
+    if path.suffix.lower() in SUPPORTED_EXTENSIONS:
+        raise SceneError(f"a {path.suffix} mesh file has no materials, so it is no scene by itself; render a scene "
+                         f"TOML with [[mesh]] file = \"{path.name}\" and a material", file=path)  # fmt: skip
 
 
 #: the deepest nesting of tables and arrays a scene may have (the deepest real one: a light's polygon, 4)
@@ -78,6 +89,7 @@ def load_dict(data: dict[str, Any], base_dir: str | Path | None = None, source: 
         raise SceneError(_first_error(exc, data), file=source or "<scene>") from None
     scene = _expand_file_meshes(scene, source)
     _check_files(scene, source)
+    _warn_replaced_materials(scene)  # once the files are known good: a warning never comes before an error
     return scene
 
 
@@ -88,6 +100,26 @@ def _warn(lines) -> None:
 
     for line in lines:
         warnings.warn(line, RefletsWarning, stacklevel=4)
+
+
+def _warn_replaced_materials(scene: Scene) -> None:
+    """A scene ``material`` given for a whole glTF or OBJ file that has materials of its own replaces them: one
+    warning line says so (a file expanded into its parts keeps them)."""
+    from .assets import is_asset, listed, own_materials
+
+    for i, mesh in enumerate(scene.mesh):
+        if not isinstance(mesh, FileMesh) or mesh.material is None or mesh.part is not None:
+            continue
+        path = scene.resolve(mesh.file)
+        if not (is_asset(path) and path.is_file()):
+            continue
+        try:
+            names = own_materials(path)
+        except (OSError, SceneError):
+            continue  # building the mesh says what is wrong with the file
+        if names:
+            _warn([f"mesh[{i}]: material '{mesh.material}' replaces the materials of {path.name} "
+                   f"({listed(names)}); leave material out to render the file's own"])  # fmt: skip
 
 
 def _expand_file_meshes(scene: Scene, source) -> Scene:
@@ -189,6 +221,13 @@ def _check_files(scene: Scene, source) -> None:
     for i, mesh in enumerate(scene.mesh):
         if isinstance(mesh, FileMesh) and not scene.resolve(mesh.file).is_file():
             raise SceneError(f"mesh file not found: {scene.resolve(mesh.file)}", file=source, field=f"mesh[{i}].file")
+        if isinstance(mesh, FileMesh) and scene.resolve(mesh.file).suffix.lower() == ".gltf":  # its .bin buffers
+            from ..gltf_file import read_gltf
+
+            for buffer in read_gltf(scene.resolve(mesh.file)).external_files(images=False):
+                if not buffer.is_file():
+                    raise SceneError(f"{scene.resolve(mesh.file).name} names the buffer {buffer.name}, which is not "
+                                     "found", file=source, field=f"mesh[{i}].file")  # fmt: skip
         if isinstance(mesh, HeightFieldMesh) and mesh.file is not None:
             mesh.file = scene.resolve(mesh.file)  # absolute: canonical_surface(mesh) has no scene to resolve with
             try:

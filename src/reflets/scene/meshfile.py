@@ -1,25 +1,36 @@
-"""Triangle meshes from files (OBJ, PLY, glTF/GLB, STL, OFF) through trimesh, with a full shading frame.
+"""Triangle meshes from files (OBJ, PLY, glTF/GLB, STL, OFF), with a full shading frame.
 
-trimesh parses the formats; this module turns its result into :class:`MeshData`: scene graphs are
-flattened with their node transforms, missing normals and uvs are filled in, and per-vertex tangents are
-built from the uv layout so anisotropic materials have an orientation on any mesh.
+glTF and GLB are read by reflets' own reader (``reflets.gltf_file``: Draco, quantized and sparse data, which
+trimesh would hand over as vertices at 0 when it cannot decode them); trimesh parses the other formats, and what
+it would log to stderr (with tracebacks) becomes one warning line naming the file. This module turns either
+into :class:`MeshData`: scene graphs are flattened with their node transforms, missing normals and uvs are
+filled in, and per-vertex tangents are built from the uv layout so anisotropic materials have an orientation
+on any mesh.
 """
 
 from __future__ import annotations
 
 import codecs
+import contextlib
 import functools
 import io
+import logging
 import re
+import threading
+import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from reflets.errors import SceneError
+from reflets.errors import RefletsWarning, SceneError
+from reflets.gltf_file import read_gltf
 from reflets.quantities import MAX_MAGNITUDE
 from reflets.scene.meshdata import MeshData
 
 SUPPORTED_EXTENSIONS = (".obj", ".ply", ".gltf", ".glb", ".stl", ".off")
+#: the formats reflets' glTF reader takes (never trimesh: see the module docstring)
+GLTF_EXTENSIONS = (".gltf", ".glb")
 
 #: fallback order for text without a byte order mark: strict UTF-8, then Windows-1252 (a superset of Latin-1's
 #: printable characters, with ’ € … in 0x80–0x9F), then Latin-1, which maps every byte and so never fails
@@ -101,15 +112,41 @@ def _resolver_class(trimesh):
     return TextAssetResolver
 
 
+class _ThreadRecords(logging.Handler):
+    """The log records of one thread (renders on other threads read files too)."""
+
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.thread, self.records = threading.get_ident(), []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if record.thread == self.thread:
+            self.records.append(record)
+
+
+@contextlib.contextmanager
+def trimesh_log_as_warnings(path: Path):
+    """What trimesh logs while it reads ``path`` (an image it cannot load, with its traceback, on stderr) as one
+    RefletsWarning line per message, naming the file."""
+    logger, handler = logging.getLogger("trimesh"), _ThreadRecords()
+    logger.addHandler(handler)
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+    said = [(r.getMessage().strip().splitlines() or [r.levelname])[0][:200] for r in handler.records]
+    for line in dict.fromkeys(said):
+        warnings.warn(f"{path.name}: {line} (trimesh, reading it)", RefletsWarning, stacklevel=3)
+
+
 def _load_trimesh(path: Path, ext: str):
-    """trimesh's object for a mesh file; text formats are decoded here, see :data:`_TRANSCODE`."""
+    """trimesh's object for a mesh file other than glTF; text formats are decoded here, see :data:`_TRANSCODE`."""
     import trimesh  # heavy import, only needed by scenes that use mesh files
 
-    if ext not in _TRANSCODE:  # glTF is UTF-8 JSON by specification, GLB binary
-        return trimesh.load(str(path), file_type=ext[1:], process=False)
     data = _TRANSCODE[ext](path.read_bytes())
     resolver = _resolver_class(trimesh)(str(path.absolute()))
-    return trimesh.load(io.BytesIO(data), file_type=ext[1:], resolver=resolver, process=False)
+    with trimesh_log_as_warnings(path):
+        return trimesh.load(io.BytesIO(data), file_type=ext[1:], resolver=resolver, process=False)
 
 
 def _unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -246,7 +283,8 @@ def load_mesh_file(path: str | Path) -> MeshData:
     ----------
     path : str or Path
         An ``.obj``, ``.ply``, ``.gltf``, ``.glb``, ``.stl`` or ``.off`` file. A glTF scene is flattened
-        into one mesh with its node transforms applied; quads and polygons are triangulated by trimesh.
+        into one mesh with its node transforms applied (:func:`gltf_mesh`, reflets' reader: Draco decoded, or
+        refused in one line); quads and polygons are triangulated by trimesh.
         Text formats (OBJ and its MTL, ASCII PLY, OFF, ASCII STL) may be UTF-8 (with or without BOM),
         Windows-1252 or Latin-1 with LF, CRLF or CR line endings: see :func:`decode_text`.
 
@@ -254,10 +292,11 @@ def load_mesh_file(path: str | Path) -> MeshData:
     -------
     MeshData
         Normals are the file's vertex normals (renormalised) when it has them, else angle-weighted smooth
-        normals from :func:`smooth_normals` (so unmerged STL triangles stay flat). uv is the file's texture
-        coordinates (trimesh gives them with v up, the OpenGL convention, glTF included) or, when a part
-        has none, a spherical projection about the bounding-box centre (:func:`spherical_uv`). Tangents
-        come from :func:`compute_tangents`. Vertices no triangle uses are dropped.
+        normals from :func:`smooth_normals` (so unmerged STL triangles stay flat; glTF: flat normals, as its
+        specification requires). uv is the file's texture coordinates (with v up, the OpenGL convention) or,
+        when a part has none, a spherical projection about the bounding-box centre (:func:`spherical_uv`).
+        Tangents come from :func:`compute_tangents` (glTF: the file's, when it has them). Vertices no
+        triangle uses are dropped (trimesh's formats).
 
     Raises
     ------
@@ -273,6 +312,8 @@ def load_mesh_file(path: str | Path) -> MeshData:
         )
     if not path.is_file():
         raise SceneError("mesh file not found" if not path.exists() else "is not a regular file", file=path)
+    if ext in GLTF_EXTENSIONS:
+        return gltf_mesh(path)
 
     import trimesh  # heavy import, only needed by scenes that use mesh files
 
@@ -320,3 +361,60 @@ def shaded_mesh(positions, normals, uvs, faces, tangents=None) -> MeshData:
         indices=np.asarray(faces, np.uint32),
     )
 
+
+def gltf_part_mesh(path: str | Path, part: int) -> MeshData:
+    """One primitive instance of a glTF file in the file's world coordinates, with a full shading frame: the
+    file's normals (flat normals when it has none, as the specification requires), its tangents (else built from
+    the uv layout: ``compute_tangents``), its TEXCOORD_0 and TEXCOORD_1 (v flipped to reflets' v up)."""
+    gltf = read_gltf(path)
+    instances = gltf.instances
+    if not 0 <= part < len(instances):
+        raise SceneError(f"part {part} does not exist: the file has {len(instances)} primitive instances", file=path)
+    instance = instances[part]
+    prim = gltf.primitive(instance.mesh, instance.primitive)
+    where = f"meshes[{instance.mesh}].primitives[{instance.primitive}]"
+    if prim is None or len(prim.indices) == 0:
+        raise SceneError(f"{where}: no triangles", file=path)
+    pos, faces = prim.positions, prim.indices
+    normals, tangents, (uv, uv1) = prim.normals, prim.tangents, prim.uvs
+    if normals is None:  # flat: every triangle its own three vertices
+        corners = faces.ravel()
+        pos, faces = pos[corners], np.arange(len(corners)).reshape(-1, 3)
+        uv = uv[corners] if uv is not None else None
+        uv1 = uv1[corners] if uv1 is not None else None
+        tangents = None
+        face = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
+        normals = np.repeat(_unit(face)[0], 3, axis=0)
+    if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(normals))):
+        raise SceneError(f"{where}: non-finite vertex data", file=path)
+    mesh_uv = np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=1) if uv is not None else spherical_uv(pos)
+    normals, length = _unit(normals)
+    normals[length == 0] = (0.0, 1.0, 0.0)
+    if tangents is not None and not np.all(np.isfinite(tangents)):
+        tangents = None  # built from the uv layout
+    local = shaded_mesh(pos, normals, mesh_uv, faces, tangents)
+    if uv1 is not None:
+        local = replace(local, uvs1=np.stack([uv1[:, 0], 1.0 - uv1[:, 1]], axis=1).astype(np.float32))
+    world = local.transformed(instance.matrix)
+    extent = np.abs(world.positions).max()
+    if not np.isfinite(extent) or extent > MAX_MAGNITUDE:
+        raise SceneError(f"{where} placed by nodes[{instance.node}]: vertex coordinates up to {extent:.3g}, over "
+                         f"{MAX_MAGNITUDE:.0e}", file=path)  # fmt: skip
+    return world
+
+
+def gltf_mesh(path: Path) -> MeshData:
+    """Every primitive instance of a glTF file's default scene in one mesh (a material given in the scene)."""
+    count = len(read_gltf(path).instances)
+    parts = [gltf_part_mesh(path, k) for k in range(count)]
+    if not parts:
+        raise SceneError("contains no triangles (only points, lines or nothing)", file=path)
+    offsets = np.cumsum([0] + [p.n_vertices for p in parts[:-1]])
+    return MeshData(
+        positions=np.concatenate([p.positions for p in parts]),
+        normals=np.concatenate([p.normals for p in parts]),
+        tangents=np.concatenate([p.tangents for p in parts]),
+        uvs=np.concatenate([p.uvs for p in parts]),
+        indices=np.concatenate([p.indices + np.uint32(o) for p, o in zip(parts, offsets, strict=True)]),
+        uvs1=np.concatenate([p.uv_sets[:, 2:] for p in parts]) if any(p.uvs1 is not None for p in parts) else None,
+    )

@@ -52,7 +52,7 @@ def _read(path: Path, size: int, mtime: int) -> tuple[tuple[str, ...], tuple]:
     per material of the file: read and parsed once while the file is unchanged."""
     import trimesh
 
-    from .meshfile import decode_text
+    from .meshfile import decode_text, trimesh_log_as_warnings
 
     text = decode_text(path.read_bytes())
     libraries = tuple(name for line in text.splitlines() if line.split()[:1] == ["mtllib"] for name in line.split()[1:])
@@ -66,8 +66,9 @@ def _read(path: Path, size: int, mtime: int) -> tuple[tuple[str, ...], tuple]:
             return names
 
     try:
-        loaded = trimesh.load(io.BytesIO(text.encode("utf-8")), file_type="obj", resolver=NamesOnly(str(path)),
-                              process=False)  # fmt: skip
+        with trimesh_log_as_warnings(path):
+            loaded = trimesh.load(io.BytesIO(text.encode("utf-8")), file_type="obj", resolver=NamesOnly(str(path)),
+                                  process=False)  # fmt: skip
     except Exception as exc:  # trimesh raises many types for corrupt files
         reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:200]
         raise SceneError(f"cannot read the OBJ file: {reason}", file=path) from exc

@@ -13,18 +13,20 @@ Meshes of other materials are shaded by the forward pass; a ``scratched`` mesh g
   degrees, normalised by 3 / (π H² cos θ_ℓ) so the result converges to the δ-light answer as H → 0, with the
   document's culling (|θ_ℓ + θ_o| ≥ H) and ``light_samples`` stratified samples per live layer.
 
-Frames: ``render(spp=…)`` accumulates spp / samples frames (spp a multiple of ``samples``), frame k seeded by
-(pixel, k, seed). Compile-time flags keep what a scene lacks out of the program (llvmpipe runs both sides of
-uniform branches): the layer count, table size, sample counts, light counts, the environment and constant α.
+Frames: ``render(spp=…)`` accumulates spp / samples frames, frame k seeded by (pixel, k, seed); an spp that is
+not a multiple of ``samples`` is rounded up to the next one, with a one-line note (a frame is drawn whole).
+Compile-time flags keep what a scene lacks out of the program (llvmpipe runs both sides of uniform branches): the
+layer count, table size, sample counts, light counts, the environment and constant α.
 """
 
 from __future__ import annotations
 
+import warnings
 from typing import ClassVar, Literal
 
 from pydantic import Field
 
-from ..errors import ArgumentError
+from ..errors import ArgumentError, RefletsWarning
 from ..techniques.base import register_technique
 from ..techniques.forward import Forward, ForwardParams
 from .lobes import LobeSettings, ScratchLobes
@@ -67,11 +69,13 @@ class Scratches(Forward):
         return max(self.params.samples, 1)  # one frame
 
     def frames(self, spp: int) -> tuple[int, int]:
+        """(spp / samples frames, no supersampling); spp rounded up to a multiple of ``samples`` with a note."""
         n = max(self.params.samples, 1)
-        if spp < 1 or spp % n:
-            raise ArgumentError(
-                f"spp={spp} is not a positive multiple of samples={n}: scratches accumulates spp/samples frames of "
-                f"{n} environment samples each (use spp={n}, {2 * n}, {4 * n}, … or set samples)",
-                field="spp",
-            )
-        return spp // n, 1
+        if spp < 1:
+            raise ArgumentError(f"{spp} is out of range; samples per pixel must be at least 1", field="spp")
+        frames = -(-spp // n)
+        if frames * n != spp:
+            warnings.warn(f"spp {spp} rounded up to {frames * n}: the scratched material draws its samples in frames "
+                          f"of {n} (samples = {n}); give spp a multiple of {n}, or set samples", RefletsWarning,
+                          stacklevel=2)  # fmt: skip
+        return frames, 1

@@ -26,7 +26,9 @@ An event is a dict with a ``type`` (JSON-able: a script replays a list of them, 
   (``stops``), ``tonemap`` (``mode``), ``reference`` (``spp``: start computing the reference of this view in
   the background), ``show`` (``mode``: image / reference / error).
 
-An unknown event or field is an :class:`ArgumentError` naming it.
+Every event is checked before it is applied (viewer/events.py: a model per type, with the fields' types and
+ranges; the scene's indices and names): an unknown event or field, or a value out of range, is an
+:class:`ArgumentError` naming it, and changes nothing.
 """
 
 from __future__ import annotations
@@ -38,8 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ArgumentError
-from ..imageio import TONEMAP_MODES, tonemap
+from ..errors import ArgumentError, RefletsError
+from ..imageio import tonemap
 from ..metrics import relmse
 from .camera import OrbitCamera
 from .painting import Painting
@@ -54,7 +56,6 @@ WHEEL_ZOOM = 1.1
 #: a fly key moves this fraction of the scene's radius
 FLY_STEP = 0.05
 ORBIT_KEY_DEGREES = 5.0
-SHOW_MODES = ("image", "reference", "error")
 #: frame times kept for the overlay's median
 HISTORY = 60
 
@@ -198,19 +199,20 @@ class ViewerController(Painting):
 
     # ------------------------------------------------------------------ events
     def handle(self, event: dict) -> None:
-        """Apply one event (see the module docstring)."""
-        if not isinstance(event, dict) or "type" not in event:
-            raise ArgumentError(f"an event is a dict with a 'type', got {event!r}", field="event")
-        kind = event["type"]
-        handler = getattr(self, f"_on_{kind}", None)
-        if handler is None:
-            allowed = ", ".join(sorted(name[4:] for name in dir(self) if name.startswith("_on_")))
-            raise ArgumentError(f"unknown event type {kind!r}; allowed: {allowed}", field="event.type")
-        fields = {k: v for k, v in event.items() if k != "type"}
+        """Apply one event (see the module docstring), checked first (viewer/events.py: the models a script is
+        loaded with, and the scene's indices and names); a refused event leaves the view as it was."""
+        import dataclasses
+
+        from .events import check_in_scene, parse_event
+
+        event = parse_event(event)
+        check_in_scene(event, self.scene, self.size)
+        camera = dataclasses.replace(self.camera)
         try:
-            handler(**fields)
-        except TypeError as exc:
-            raise ArgumentError(f"event {kind!r}: {exc}", field=f"event.{kind}") from None
+            getattr(self, f"_on_{event.type}")(**event.arguments())
+        except RefletsError:
+            self.camera = camera  # a move the scene's camera refuses (too far away) is undone
+            raise
 
     def replay(self, events: list[dict], render_each: bool = False) -> None:
         for event in events:
@@ -279,8 +281,6 @@ class ViewerController(Painting):
             if self._pointer["moved"] < CLICK_PIXELS and self._pointer["button"] == "left":
                 self._on_pick(x, y)
             self._pointer = None
-        elif action not in ("down", "move", "up"):
-            raise ArgumentError(f"pointer action {action!r}; allowed: down, move, up", field="event.pointer.action")
 
     def _on_wheel(self, dy: float) -> None:
         self._on_zoom(WHEEL_ZOOM**dy)
@@ -309,23 +309,23 @@ class ViewerController(Painting):
         self.selection = self.pick(x, y)
 
     def _on_select(self, mesh: int | None = None, light: int | None = None) -> None:
-        if mesh is not None and light is not None:
-            raise ArgumentError("select a mesh or a light, not both", field="event.select")
         if mesh is not None:
-            self._check_index(mesh, self.scene.mesh, "mesh")
             self.selection = ("mesh", mesh)
         elif light is not None:
-            self._check_index(light, self.scene.light, "light")
             self.selection = ("light", light)
         else:
             self.selection = None
 
     def pick(self, x: float, y: float) -> tuple[str, int] | None:
         """What pixel (x, y) (from the top-left) shows: ("light", i) near a point light's marker or on an area
-        light's emitter, ("mesh", i), or None. A ray cast on the CPU (Embree, the reference's geometry)."""
+        light's emitter, ("mesh", i), or None (also outside the view: a drag may end there). A ray cast on the CPU
+        (Embree, the reference's geometry)."""
         from ..reference.geometry import EMITTERS, MESHES, SceneGeometry
         from ..scene.camera import pixel_rays
 
+        self.last_hit = None
+        if not (0 <= x < self.size[0] and 0 <= y < self.size[1]):
+            return None
         for index, pixel in self.light_pixels().items():  # a point light's marker (it has no surface to hit)
             if self.scene.light[index].type == "point" and math.hypot(pixel[0] - x, pixel[1] - y) <= MARKER_PIXELS:
                 return "light", index
@@ -333,8 +333,7 @@ class ViewerController(Painting):
             self._geometry = SceneGeometry(self.scene)
         camera = self.scene.camera
         origin, dirs = pixel_rays(camera, self.size, offsets=(x - math.floor(x), y - math.floor(y)))
-        col = int(np.clip(math.floor(x), 0, self.size[0] - 1))
-        row = int(np.clip(math.floor(y), 0, self.size[1] - 1))
+        col, row = math.floor(x), math.floor(y)
         origin = np.broadcast_to(origin, dirs.shape)[row, col]  # an orthographic camera's rays start per pixel
         hits = self._geometry.intersect(origin[None], dirs[row, col][None])
         self.last_hit = origin + hits.t[0] * dirs[row, col] if hits.kind[0] >= 0 else None
@@ -427,13 +426,9 @@ class ViewerController(Painting):
         self._edited()
 
     def _on_exposure(self, stops: float) -> None:
-        if not math.isfinite(float(stops)) or abs(float(stops)) > 64:
-            raise ArgumentError(f"exposure must be finite stops in [-64, 64], got {stops!r}", field="event.exposure")
         self.exposure = float(stops)
 
     def _on_tonemap(self, mode: str) -> None:
-        if mode not in TONEMAP_MODES:
-            raise ArgumentError(f"tone mapping {mode!r}; allowed: {', '.join(TONEMAP_MODES)}", field="event.tonemap")
         self.tonemap_mode = mode
 
     def _on_reference(self, spp: int = 64) -> None:
@@ -442,8 +437,6 @@ class ViewerController(Painting):
         self.reference = ReferenceJob(self.scene, self.size, spp)
 
     def _on_show(self, mode: str) -> None:
-        if mode not in SHOW_MODES:
-            raise ArgumentError(f"show {mode!r}; allowed: {', '.join(SHOW_MODES)}", field="event.show")
         self.show = mode
 
     # ------------------------------------------------------------------ saving
@@ -512,8 +505,7 @@ class ViewerController(Painting):
             self.show = "image"
 
     def _selected(self, kind: str, index: int | None) -> int:
-        if index is not None:
-            self._check_index(index, self.scene.mesh if kind == "mesh" else self.scene.light, kind)
+        if index is not None:  # in range: events.check_in_scene
             return index
         if self.selection is None or self.selection[0] != kind:
             raise ArgumentError(f"no {kind} is selected: give its index", field=f"event.{kind}.index")
@@ -537,11 +529,6 @@ class ViewerController(Painting):
             )
         centre, radius = bounding_sphere(np.asarray(points, np.float64))
         return centre, max(radius, 1e-3)
-
-    @staticmethod
-    def _check_index(index, items, what: str) -> None:
-        if not isinstance(index, int) or not 0 <= index < len(items):
-            raise ArgumentError(f"no {what}[{index}]: the scene has {len(items)}", field=f"event.select.{what}")
 
 
 def _key(scene, size, spp: int) -> str:

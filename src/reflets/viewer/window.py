@@ -20,19 +20,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ArgumentError, GLUnavailableError
+from ..errors import ArgumentError, GLUnavailableError, RefletsError
+from .events import MAX_FRAMES, Script, ScriptEvents, as_script, check_frames, check_script  # noqa: F401  (the CLI's)
 from .panels import METHODS  # what m cycles through: the panel's list
 
 
-def load_script(path: str | Path) -> list[dict]:
-    """A recorded event list (JSON: a list of event objects; ``{"type": "wait", "frames": n}`` waits)."""
-    from ..arguments import read_json_list
+def load_script(path: str | Path) -> Script:
+    """A recorded event list (docs/viewer.md: a JSON list of events; ``{"type": "wait", "frames": n}`` waits),
+    every event checked as the controller checks it, all before the window opens (the scene's indices and names:
+    ``run``, before the first frame)."""
+    from ..arguments import read_model
 
-    path = Path(path)
-    events = read_json_list(path, "--script", "events")
-    if not all(isinstance(e, dict) and "type" in e for e in events):
-        raise ArgumentError("must be a JSON list of objects with a 'type'", file=path, field="--script")
-    return events
+    events = read_model(ScriptEvents, path, field="--script", what="an event script (a JSON list of events)")
+    return Script(events.dicts(), file=path)
 
 
 def _free_name(stem: str, suffix: str) -> Path:
@@ -89,29 +89,34 @@ class ViewerWindow:
         screenshot: str | Path | None = None,
         script: list[dict] | None = None,
         save_scene: str | Path | None = None,
+        overwrite: bool = False,
     ) -> dict:
-        """Draw until the window closes, or — with ``frames`` — until that many frames are drawn and the
-        script is replayed (one event per frame); then write the screenshot (the window's pixels for PNG, the
-        shown HDR image otherwise) and the scene. Returns the controller's status and the frame times."""
-        events = list(script or [])
-        wait = 0
+        """Draw until the window closes, or — with ``frames`` (at most MAX_FRAMES) — until that many frames are
+        drawn and the script is replayed (one event per frame); then write the screenshot (the window's pixels for
+        PNG, the shown HDR image otherwise) and the scene. Every event of the script is checked before the first
+        frame; one the state refuses later (a material edit with nothing selected) ends the run, naming its index,
+        with nothing written. Returns the controller's status and the frame times."""
         times, latencies = [], []
         first_frame = None
         try:
+            frames = check_frames(frames, field="frames")
+            events = as_script(script or [])
+            check_script(events, self.controller.scene, self.controller.size)
+            next_event, wait = 0, 0
             while not self.wnd.is_closing:
                 t = time.perf_counter()
                 handled = False
                 if wait > 0:
                     wait -= 1
-                elif events:
-                    event = events.pop(0)
-                    if event.get("type") == "wait":
-                        wait = int(event.get("frames", 1)) - 1
+                elif next_event < len(events):
+                    event, next_event = events[next_event], next_event + 1
+                    if event["type"] == "wait":
+                        wait = event["frames"] - 1
                     else:
-                        self.controller.handle(event)
+                        self._replay(event, next_event - 1, events)
                         handled = True
                 self.draw()
-                done = frames is not None and self.frames >= frames and not events and wait <= 0
+                done = frames is not None and self.frames >= frames and next_event == len(events) and wait <= 0
                 if done and screenshot is not None:
                     self.save_screenshot(screenshot)  # the view, without the panels drawn over it
                 self.draw_panels()
@@ -124,13 +129,20 @@ class ViewerWindow:
                 if done:
                     break
             if save_scene is not None:
-                self.controller.save_scene(save_scene)
+                self.controller.save_scene(save_scene, overwrite=overwrite)
         finally:
             status = self.controller.status()
             self.close()
         status["event_latency_ms"] = latencies
         status["first_frame_at"] = first_frame
         return {**status, "window_frame_ms": times}
+
+    def _replay(self, event: dict, index: int, script: Script) -> None:
+        """A script's event; a refusal names the script and the event's index in it."""
+        try:
+            self.controller.handle(event)
+        except RefletsError as exc:
+            raise ArgumentError(f"[{index}] ({event['type']}): {exc}", file=script.file, field=script.field) from None
 
     def draw(self) -> None:
         controller = self.controller
@@ -279,8 +291,6 @@ class ViewerWindow:
 
     def _safe(self, event: dict) -> None:
         """Interactive input: a refused event (a method that does not apply, …) prints and the viewer goes on."""
-        from ..errors import RefletsError
-
         try:
             self.controller.handle(event)
         except RefletsError as exc:
