@@ -6,8 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from reflets.cache import Cache, cache_budget, content_key
+from reflets.cache import Cache, cache_budget, clear_memory, content_key
 from reflets.errors import ArgumentError
+
+
+@pytest.fixture(autouse=True)
+def _budget_to_themselves():
+    """Each test's caches alone in the shared budget (each cache of the process keeps its latest entry in it)."""
+    clear_memory()
 
 
 def _cache(kind: str = "test") -> Cache:
@@ -101,3 +107,15 @@ def test_a_memo_keeps_the_most_recently_used_values():
     assert memo.get("c", lambda: make(3)) == 3  # "b", the least recently used, goes
     assert len(memo) == 2 and memo.get("b", lambda: make(4)) == 4
     assert made == [1, 2, 3, 4]
+
+
+def test_each_cache_keeps_its_latest_entry_past_the_budget(tmp_path, monkeypatch):
+    """A scratch table and its α maps, the maps alone over the budget: both stay (the render that asked uses both;
+    either pushing the other out would read it again at every frame) — older entries still go."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setenv("REFLETS_CACHE_MB", "0.016")  # room for two results of 8 kB
+    tables, maps = _cache("tables"), _cache("maps")
+    tables.get("t0", _kb8(0)), maps.get("m", lambda: np.zeros(3000))  # the maps: 24 kB
+    assert tables.peek("t0") is not None and maps.peek("m") is not None
+    tables.get("t1", _kb8(1))
+    assert tables.peek("t0") is None and tables.peek("t1") is not None and maps.peek("m") is not None

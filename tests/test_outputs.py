@@ -184,3 +184,10 @@ def test_the_other_commands_refuse_an_existing_output_or_an_input_before_any_wor
     assert code == 2 and err.count("\n") == 1, err
     assert "is one of the inputs" in err or "unsupported output extension" in err, err
     assert named.read_bytes() == before
+
+
+def test_a_link_that_loops_is_no_input_and_no_traceback(capsys, files):
+    loop = files["dir"] / "loop.png"
+    loop.symlink_to(loop)
+    code, err = run(capsys, ["compare", str(files["image"]), str(files["png"]), "--diff", str(loop)])
+    assert code in (0, 2) and "Traceback" not in err and err.count("\n") <= 1, err

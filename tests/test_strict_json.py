@@ -115,6 +115,14 @@ def test_json_inputs_are_read_strictly_and_refused_in_one_line(tmp_path, content
     assert said in str(caught.value) and "\n" not in str(caught.value) and "--board" in str(caught.value)
 
 
+def test_a_device_is_not_read_as_a_json_input():
+    """/dev/zero has no size to check and no end: refused before it is read."""
+    from reflets.errors import ArgumentError
+
+    with pytest.raises(ArgumentError, match="is not a regular file"):
+        jsonio.read("/dev/zero", field="--board", what="a board")
+
+
 def test_a_json_input_past_the_size_bound_is_refused_before_it_is_read(tmp_path, monkeypatch):
     from reflets.errors import ArgumentError
 

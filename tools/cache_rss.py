@@ -16,7 +16,7 @@ from reflets.scratches.material import ALPHAS, TABLES, Scratched
 
 
 def peak_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # ru_maxrss: KiB on Linux
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e6  # ru_maxrss: KiB on Linux; MB = 10⁶ B
 
 
 def variant(k: int) -> Scratched:

@@ -7,8 +7,8 @@
 - ``Cache(kind, load, save)``: memory first, then the disk (a broken or stale file is recomputed, a read-only
   disk only costs the recomputation), then ``make`` — stored in both. Every cache of the process shares one
   memory budget (``REFLETS_CACHE_MB``, default 256 MB; 0: nothing kept in memory), the least recently used
-  entry of any of them out past it: a long session that edits materials (each variant its tables and α maps)
-  does not grow without bound, nor by one budget per kind of result;
+  entry of any of them out past it (each keeps its latest): a long session that edits materials (each variant
+  its tables and α maps) does not grow without bound, nor by one budget per kind of result;
 - ``Memo(size)``: small values (a number, a word) by key, in memory only, the least recently used out past
   ``size`` entries.
 """
@@ -102,7 +102,7 @@ class Memo:
 
 
 def cache_budget() -> int:
-    """Bytes every cache of the process may hold together: ``REFLETS_CACHE_MB`` × 10⁶ (read at each store: a test
+    """Bytes every cache of the process may hold together: ``REFLETS_CACHE_MB`` × 10⁶ (read at each miss: a test
     or a session may change it), else DEFAULT_MB. Not a non-negative number: an ArgumentError naming it."""
     text = os.environ.get(ENV_VAR, "").strip()
     if not text:
@@ -131,6 +131,13 @@ class _Shared:
 _SHARED = _Shared()
 
 
+def clear_memory() -> None:
+    """Drop every cache's entries from memory (what is on disk stays): the whole budget free again."""
+    with _SHARED.lock:
+        for cache, key in list(_SHARED.entries):
+            cache._forget(key)
+
+
 class Cache:
     """Memory + disk cache of one kind of result, stored as ``<key>.npz``; its memory within the budget every
     cache of the process shares (:func:`cache_budget`)."""
@@ -139,14 +146,16 @@ class Cache:
         self.kind, self._load, self._save = kind, load, save
         self._memory: dict[str, tuple[object, int]] = {}
         self._bytes = 0
+        self._latest: str | None = None  # the key last asked for: kept when another cache needs room
 
     def get(self, key: str, make: Callable[[], object]):
         """The result under ``key``: from memory, else from disk, else ``make()`` (then stored in both)."""
-        budget = cache_budget()  # a bad REFLETS_CACHE_MB is said before anything is computed
         with _SHARED.lock:
             if key in self._memory:
                 _SHARED.entries.move_to_end((self, key))
+                self._latest = key
                 return self._memory[key][0]
+        budget = cache_budget()  # a bad REFLETS_CACHE_MB is said before anything is loaded or computed
         path = cache_dir(self.kind) / f"{key}.npz"
         value = None
         if path.is_file():
@@ -179,21 +188,24 @@ class Cache:
         return len(self._memory)
 
     def _remember(self, key: str, value, budget: int) -> None:
-        """Keep ``value`` in memory, and drop the least recently used entries of every cache past the budget; the
-        newest stays even alone over it (the render that asked uses it again at once) unless the budget is 0."""
+        """Keep ``value`` in memory, and drop the least recently used entries of every cache past the budget —
+        except each cache's latest (the render that asked for a table and its α maps uses both at once: one
+        alone over the budget must not push the other out, to be read again at every frame); budget 0: none."""
         size = size_of(value)
         with _SHARED.lock:
             if key in self._memory:  # another thread made it meanwhile
                 self._forget(key)
-            if budget == 0:
-                return
-            self._memory[key] = (value, size)
-            self._bytes += size
-            _SHARED.entries[(self, key)] = size
-            _SHARED.bytes += size
-            while _SHARED.bytes > budget and len(_SHARED.entries) > 1:
-                cache, oldest = next(iter(_SHARED.entries))
-                cache._forget(oldest)
+            if budget > 0:
+                self._memory[key] = (value, size)
+                self._bytes += size
+                _SHARED.entries[(self, key)] = size
+                _SHARED.bytes += size
+                self._latest = key
+            for cache, oldest in list(_SHARED.entries):  # least recently used first
+                if _SHARED.bytes <= budget:
+                    break
+                if budget == 0 or oldest != cache._latest:
+                    cache._forget(oldest)
 
     def _forget(self, key: str) -> None:
         """Drop ``key`` from memory (the shared lock held)."""

@@ -107,8 +107,8 @@ def cmd_render(args) -> int:
 def cmd_view(args) -> int:
     from .imageio import IMAGE_WRITE_EXTENSIONS
     from .outputs import check_output
-    from .viewer.events import parse_event
-    from .viewer.window import ViewerWindow, check_frames, load_script
+    from .viewer.events import check_frames, parse_event
+    from .viewer.window import ViewerWindow, load_script
 
     script = load_script(args.script) if args.script else None
     outputs = {"--screenshot": (args.screenshot, IMAGE_WRITE_EXTENSIONS), "--save-scene": (args.save_scene, (".toml",)),
@@ -370,6 +370,11 @@ def cmd_ar_run(args) -> int:
             posed += result.pose is not None
         if shown == 0:
             raise ArgumentError("no frame could be read", field="input")
+    except KeyboardInterrupt:
+        if args.webcam is None or shown == 0:  # a video or images cut short: as a failed run
+            sink.discard()
+            raise
+        print(f"stopped by an interrupt after {shown} frames")  # how a camera's run ends: its recording kept
     except BaseException:
         sink.discard()  # nothing of a run that failed half-way (an output there before: untouched)
         raise

@@ -24,7 +24,7 @@ import numpy as np
 __all__ = ["dumps", "finite_or_none", "read", "write"]
 
 #: the largest JSON input read (a board, camera intrinsics, strokes, an event script: kilobytes in real use)
-MAX_JSON_BYTES = 16 << 20
+MAX_JSON_BYTES = 16_000_000
 
 
 def finite_or_none(obj: Any) -> Any:
@@ -101,6 +101,8 @@ def read(path: str | Path, *, field: str | None = None, what: str = "a JSON file
     try:
         if path.is_dir():
             raise ArgumentError(f"is a directory, expected {what}", file=path, field=field)
+        if path.exists() and not path.is_file():  # a device or a pipe: no size to check, maybe no end
+            raise ArgumentError(f"is not a regular file, expected {what}", file=path, field=field)
         size = path.stat().st_size
         if size > MAX_JSON_BYTES:
             raise ArgumentError(f"is {size:,} bytes; {what} is at most {MAX_JSON_BYTES:,}", file=path, field=field)

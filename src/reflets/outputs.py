@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import os
 import secrets
+import stat
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -60,10 +61,11 @@ def check_output_path(path: str | Path, allowed: Iterable[str], *, field: str | 
 
 
 def _same_file(a: Path, b: Path) -> bool:
-    """The same file: one path (links resolved), or two names of one file (a hard link)."""
-    if a.resolve() == b.resolve():
-        return True
-    with contextlib.suppress(OSError):
+    """The same file: one path (links resolved), or two names of one file (a hard link). A link that loops
+    resolves to nothing (RuntimeError on Python 3.11): no file, not an input."""
+    with contextlib.suppress(OSError, RuntimeError):
+        if a.resolve() == b.resolve():
+            return True
         return a.exists() and b.exists() and os.path.samefile(a, b)
     return False
 
@@ -83,7 +85,7 @@ def atomic_write(path: Path, payload: bytes) -> None:
 
     The temporary file lives in the same directory so that :func:`os.replace` is a same-filesystem rename,
     which is atomic on POSIX and Windows. It is created with mode 0o666 so that the umask applies as for any
-    new file.
+    new file; a file it replaces keeps its permissions.
     """
     tmp = path.with_name(f".{path.name}.{secrets.token_hex(6)}.tmp")
     try:
@@ -96,6 +98,8 @@ def atomic_write(path: Path, payload: bytes) -> None:
             fh.write(payload)
             fh.flush()
             os.fsync(fh.fileno())
+        with contextlib.suppress(FileNotFoundError):
+            os.chmod(tmp, stat.S_IMODE(os.stat(path).st_mode))
         os.replace(tmp, path)
     except BaseException as exc:
         with contextlib.suppress(OSError):

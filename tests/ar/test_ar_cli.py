@@ -193,6 +193,8 @@ def test_the_frame_sink_replaces_only_with_overwrite_and_only_a_folder_of_frames
     sink.commit()
     assert [p.name for p in out.iterdir()] == ["frame_00000.png"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["frames"]  # no temporary left
+    with pytest.raises(ArgumentError, match="holds one of the inputs"):  # its frames are this run's input
+        FrameSink.open(str(out), overwrite=True, inputs=[str(out / "frame_00000.png")])
     (out / "notes.txt").write_text("mine")
     with pytest.raises(ArgumentError, match="holds files that are not frames"):
         FrameSink.open(str(out), overwrite=True)

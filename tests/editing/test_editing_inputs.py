@@ -146,7 +146,7 @@ def test_non_finite_huge_or_complex_targets_are_refused(tmp_path, capsys, value)
     ("arrays", "words"),
     [
         ({"mask": np.zeros(VERTICES, bool)}, "selects no vertex"),
-        ({"ell": np.zeros((VERTICES, 3))}, "zero on every vertex"),
+        ({"ell": np.zeros((VERTICES, 3))}, r"zero \(a norm ≤ 1e-12\) on every vertex"),
         ({"mask": np.ones(VERTICES, np.int64)}, "expected bool"),
         ({"ell": np.zeros((3, 3))}, "one row per vertex"),
         ({"ell": np.array([None, None], object)}, "Object arrays cannot be loaded"),  # no pickles
@@ -165,10 +165,17 @@ def test_a_small_file_cannot_unpack_a_huge_array(tmp_path):
         load_targets(tmp_path / "t.npz", VERTICES)
 
 
-def test_tiny_target_rows_are_directions():
-    """The solver takes rows under 1e-12 for none: each row is made a direction first (only zero is none)."""
-    ell, _ = check_targets(targets()["ell"] * 1e-300, targets()["mask"], VERTICES)
-    np.testing.assert_array_equal(ell[:10], [[1.0, 0.0, 0.0]] * 10)
+def test_target_rows_keep_the_solver_s_meaning():
+    """Rows as given (not rescaled): one of norm ≤ NO_TARGET is no target, as the solver reads it — the degenerate
+    rows `highlights` writes (zero or nearly) stay free when its ℓ is fed back as targets."""
+    from reflets.editing.solver import NO_TARGET
+
+    ell = targets()["ell"].astype(np.float64)
+    ell[1] *= NO_TARGET / 2
+    kept, _ = check_targets(ell, targets()["mask"], VERTICES)
+    np.testing.assert_array_equal(kept, ell)
+    with pytest.raises(ArgumentError, match="no target to solve for"):
+        check_targets(ell * NO_TARGET / 2, targets()["mask"], VERTICES)
 
 
 # ------------------------------------------------------------------ --iterations, --mesh, --light

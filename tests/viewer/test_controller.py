@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import reflets
-from reflets.errors import ArgumentError
+from reflets.errors import ArgumentError, OutputError
 from reflets.metrics import relmse
 from reflets.viewer import ViewerController
 
@@ -134,7 +134,7 @@ def test_edits_then_the_saved_scene_renders_the_same_image(controller, tmp_path)
     saved = controller.save_scene(tmp_path / "edited.toml")
     again = reflets.render(reflets.load_scene(saved), method="forward")
     assert relmse(frame, again) < 1e-4
-    with pytest.raises(ArgumentError, match="exists already"):
+    with pytest.raises(OutputError, match="exists already"):
         controller.save_scene(saved)  # nothing the user had is overwritten
     camera = json.loads(controller.save_camera(tmp_path / "camera.json").read_text())
     assert camera["position"] == pytest.approx(list(controller.scene.camera.position))

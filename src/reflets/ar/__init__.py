@@ -4,16 +4,10 @@ with known poses (the test data: real photographs are not available offline)."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, model_validator
 
 from .. import jsonio
-from ..quantities import Finite
-
-#: a number in an ar input file (camera.json, board.json): a JSON number, finite and within MAX_MAGNITUDE — not a
-#: string nor true / false, which pydantic's lax mode would take for numbers
-Number = Annotated[Finite, Field(strict=True)]
 
 #: JSON's names of the values json.loads gives
 _JSON_KINDS = {list: "an array", str: "a string", int: "a number", float: "a number", bool: "true / false"}

@@ -21,8 +21,9 @@ from pydantic import Field, ValidationInfo, field_validator
 
 from ..arguments import read_model, validated
 from ..errors import ArgumentError
+from ..quantities import JsonNumber as Number
 from ..scene.model import MAX_IMAGE_SIDE
-from . import InputFile, Number, write_json
+from . import InputFile, write_json
 
 CV_TO_GL = np.diag([1.0, -1.0, -1.0])
 

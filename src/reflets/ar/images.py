@@ -86,9 +86,10 @@ def _opened(path: Path) -> Iterator:
 def _pixels(image, mode: str, path: Path) -> np.ndarray:
     """The decoded frame as uint8 in ``mode``: a 16-bit grey image scaled to 8 bits (Pillow's convert would clip
     it at 255), a palette through RGBA (as Pillow asks when it has transparency)."""
-    if image.mode in ("I", "F"):
+    values = np.asarray(image) if image.mode in ("I", "F") else None  # older Pillows open 16-bit PNGs as "I"
+    if values is not None and not (image.mode == "I" and values.min() >= 0 and values.max() <= 65535):
         raise ArgumentError(f"is a 32-bit image (Pillow mode {image.mode}); frames are 8 or 16 bits", file=path)
-    if image.mode.startswith("I;16"):
+    if image.mode.startswith("I;16") or values is not None:
         grey = np.round(np.asarray(image, np.float64) / 257.0).astype(np.uint8)
         return grey if mode == "L" else np.repeat(grey[..., None], 3, axis=2)
     if image.mode in ("P", "PA"):

@@ -127,7 +127,13 @@ class FrameSink:
                                 file=path)  # fmt: skip
         if not path.parent.is_dir():
             raise ArgumentError(f"the folder '{path.parent}' does not exist; create it first", file=path)
+        if not os.access(path.parent, os.W_OK | os.X_OK):
+            raise ArgumentError(f"the folder '{path.parent}' is not writable", file=path)
         check_not_input(path, inputs)
+        if path.is_dir():  # its frames would go with it
+            inside = [item for item in inputs if item is not None and path.resolve() in Path(item).resolve().parents]
+            if inside:
+                raise ArgumentError(f"holds one of the inputs ({inside[0]}); give the output another name", file=path)
         if path.exists() and not overwrite:
             raise ArgumentError("exists already; give --overwrite to replace it (nothing was written)", file=path)
         if path.exists() and path.is_dir() != (not suffix):
@@ -151,20 +157,28 @@ class FrameSink:
         else:
             from ..imageio import write_png8
 
-            self.writing.mkdir(exist_ok=True)
+            try:
+                self.writing.mkdir(exist_ok=True)
+            except OSError as exc:
+                raise ArgumentError(f"cannot create the frames' folder ({exc.strerror or exc})",
+                                    file=self.path) from None  # fmt: skip
             write_png8(self.writing / FRAME_FORMAT.format(self.count), frame)
         self.count += 1
 
     def commit(self) -> None:
         """The output moved into place (an existing one replaced: a folder is moved aside, then removed)."""
         self._release()
-        if self.path.is_dir():
-            aside = self.path.with_name(f".{self.path.name}.{secrets.token_hex(6)}.old")
-            os.replace(self.path, aside)
-            os.replace(self.writing, self.path)
-            shutil.rmtree(aside, ignore_errors=True)
-        else:
-            os.replace(self.writing, self.path)
+        try:
+            if self.path.is_dir():
+                aside = self.path.with_name(f".{self.path.name}.{secrets.token_hex(6)}.old")
+                os.replace(self.path, aside)
+                os.replace(self.writing, self.path)
+                shutil.rmtree(aside, ignore_errors=True)
+            else:
+                os.replace(self.writing, self.path)
+        except OSError as exc:
+            self.discard()
+            raise ArgumentError(f"cannot move the output into place ({exc.strerror or exc})", file=self.path) from None
 
     def discard(self) -> None:
         """Nothing of a run that failed kept (the output there before, if any, untouched)."""

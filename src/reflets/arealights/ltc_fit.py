@@ -639,11 +639,15 @@ class LtcTable:
         return int(self.minv.shape[1]), int(self.minv.shape[0])
 
     def save(self, path: str | Path) -> None:
+        import io
+
+        from ..outputs import atomic_write
+
         path = Path(path)
-        if path.suffix != ".npz":
+        if path.suffix.lower() != ".npz":
             raise ArgumentError(f"an LTC table is written as .npz, got '{path.name}'", field="output")
         path.parent.mkdir(parents=True, exist_ok=True)
-        with open(path, "wb") as fh:
+        with io.BytesIO() as fh:
             np.savez_compressed(
                 fh,
                 minv=self.minv,
@@ -654,6 +658,7 @@ class LtcTable:
                 alpha=self.alpha,
                 meta=np.array(json.dumps(self.meta)),
             )
+            atomic_write(path, fh.getvalue())  # a kill mid-write leaves the table there before, or none
 
     @classmethod
     def load(cls, path) -> LtcTable:

@@ -109,8 +109,9 @@ _ZIP_MAGIC, _NPY_MAGIC = b"PK\x03\x04", b"\x93NUMPY"
 
 
 def check_targets(ell, mask, count: int, *, file: str | Path | None = None, field: str = "--targets"):
-    """``ell`` (count, 3) of real finite numbers, each row scaled to at most 1 (a tangent direction; zero: no
-    target), and ``mask`` (count,) bool that selects at least one vertex with a target — or one ArgumentError."""
+    """``ell`` (count, 3) of real finite numbers (a tangent direction each; a row of norm ≤ NO_TARGET: no target,
+    as the solver reads it), and ``mask`` (count,) bool that selects at least one vertex with a target — or one
+    ArgumentError."""
     ell, mask = np.asarray(ell), np.asarray(mask)
 
     def refuse(message: str):
@@ -134,10 +135,12 @@ def check_targets(ell, mask, count: int, *, file: str | Path | None = None, fiel
         )
     if not mask.any():
         raise refuse("'mask' selects no vertex; expected at least one True (a vertex the solve may change)")
+    from .solver import NO_TARGET
+
     ell = ell.astype(np.float64)
-    ell /= np.maximum(np.abs(ell).max(axis=1, keepdims=True), 1e-300)  # a direction: tiny rows are targets too
-    if not ell[mask].any():
-        raise refuse("'ell' is zero on every vertex 'mask' selects: no target to solve for; give one non-zero row")
+    if not (np.linalg.norm(ell[mask], axis=1) > NO_TARGET).any():
+        raise refuse(f"'ell' is zero (a norm ≤ {NO_TARGET:g}) on every vertex 'mask' selects: no target to solve "
+                     "for; give one non-zero row")  # fmt: skip
     return ell, mask
 
 

@@ -25,9 +25,11 @@ from .surface import SurfaceMesh
 
 #: weight of the Laplacian smoothing step applied to the free angles after each accepted LM step
 SMOOTHING = 0.1
-#: the most Levenberg–Marquardt iterations one solve takes: it converges in tens (20 by default); an iteration
-#: costs 10–30 ms on a brush of a few hundred vertices, 3 s with all 33k vertices of a demo sphere free
+#: the most Levenberg–Marquardt iterations one solve takes: it converges in tens (20 by default); each iteration
+#: is a sparse solve over the free vertices (seconds when a whole dense mesh is free)
 MAX_ITERATIONS = 1000
+#: a target row of norm at most this is no target (its vertex follows its neighbours)
+NO_TARGET = 1e-12
 
 
 def check_iterations(iterations, field: str = "iterations") -> int:
@@ -127,7 +129,7 @@ class HighlightProblem:
 def target_angles(mesh: SurfaceMesh, ell: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """θ* of target tangents (V, 3) in each vertex's frame, and which rows hold a target (non-zero)."""
     theta = np.arctan2(np.einsum("ij,ij->i", ell, mesh.b), np.einsum("ij,ij->i", ell, mesh.t))
-    return theta, np.linalg.norm(ell, axis=1) > 1e-12
+    return theta, np.linalg.norm(ell, axis=1) > NO_TARGET
 
 
 def solve(

@@ -11,17 +11,16 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, Strict, ValidationInfo, field_validator
 
 from ..errors import ArgumentError
-from ..quantities import Finite, Positive
+from ..quantities import JsonNumber as Number
+from ..quantities import Positive
 from .analysis import highlight_tangents
 from .highlights import _prepared
 from .solver import HighlightProblem, check_iterations, solve
 from .tools import TOOLS, WARPS, Brush, BrushError, stencil, warp_targets
 
-#: the most strokes one file holds: each is a solve (tens of ms to a second), so 256 take minutes at most
+#: the most strokes one file holds: each is a solve of its own (a scripted session, not a bulk job)
 MAX_STROKES = 256
 
-#: a number of a strokes file: JSON's own (a string or a boolean is refused, not read as one), finite, bounded
-Number = Annotated[Finite, Strict()]
 #: a point or a direction: three numbers
 Vector = Annotated[list[Number], Field(min_length=3, max_length=3)]
 

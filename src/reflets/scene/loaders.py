@@ -427,13 +427,8 @@ def scene_toml(scene: Scene) -> str:
 def save_scene(scene: Scene, path: str | Path, overwrite: bool = False) -> Path:
     """Write the scene as a TOML file (see :func:`scene_toml`); an existing file is an error unless
     ``overwrite``: an edited scene never replaces what the user had by accident."""
-    from ..errors import ArgumentError
+    from ..outputs import atomic_write, check_output
 
-    path = Path(path)
-    if path.suffix.lower() != ".toml":
-        raise ArgumentError(f"a scene file ends in .toml, got '{path.name}'", file=path)
-    if path.exists() and not overwrite:
-        raise ArgumentError("exists already; choose another name (nothing was written)", file=path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(scene_toml(scene), encoding="utf-8")
+    path = check_output(path, (".toml",), inputs=scene.input_files(), overwrite=overwrite)
+    atomic_write(path, scene_toml(scene).encode("utf-8"))
     return path

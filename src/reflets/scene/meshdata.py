@@ -110,3 +110,17 @@ class MeshData:
         return np.ascontiguousarray(
             np.concatenate([self.positions, self.normals, self.tangents, self.uv_sets], axis=1), dtype=np.float32
         )
+
+
+def merged(parts: list[MeshData]) -> MeshData:
+    """Meshes as one, each part's indices offset; a second uv set where any part has one (a part without it gives
+    its first set twice, as :attr:`MeshData.uv_sets` does)."""
+    offsets = np.cumsum([0] + [p.n_vertices for p in parts[:-1]])
+    return MeshData(
+        positions=np.concatenate([p.positions for p in parts]),
+        normals=np.concatenate([p.normals for p in parts]),
+        tangents=np.concatenate([p.tangents for p in parts]),
+        uvs=np.concatenate([p.uvs for p in parts]),
+        indices=np.concatenate([p.indices + np.uint32(o) for p, o in zip(parts, offsets, strict=True)]),
+        uvs1=np.concatenate([p.uv_sets[:, 2:] for p in parts]) if any(p.uvs1 is not None for p in parts) else None,
+    )

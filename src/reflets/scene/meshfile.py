@@ -26,7 +26,7 @@ import numpy as np
 from reflets.errors import RefletsWarning, SceneError
 from reflets.gltf_file import read_gltf
 from reflets.quantities import MAX_MAGNITUDE
-from reflets.scene.meshdata import MeshData
+from reflets.scene.meshdata import MeshData, merged
 
 SUPPORTED_EXTENSIONS = (".obj", ".ply", ".gltf", ".glb", ".stl", ".off")
 #: the formats reflets' glTF reader takes (never trimesh: see the module docstring)
@@ -409,12 +409,4 @@ def gltf_mesh(path: Path) -> MeshData:
     parts = [gltf_part_mesh(path, k) for k in range(count)]
     if not parts:
         raise SceneError("contains no triangles (only points, lines or nothing)", file=path)
-    offsets = np.cumsum([0] + [p.n_vertices for p in parts[:-1]])
-    return MeshData(
-        positions=np.concatenate([p.positions for p in parts]),
-        normals=np.concatenate([p.normals for p in parts]),
-        tangents=np.concatenate([p.tangents for p in parts]),
-        uvs=np.concatenate([p.uvs for p in parts]),
-        indices=np.concatenate([p.indices + np.uint32(o) for p, o in zip(parts, offsets, strict=True)]),
-        uvs1=np.concatenate([p.uv_sets[:, 2:] for p in parts]) if any(p.uvs1 is not None for p in parts) else None,
-    )
+    return merged(parts)

@@ -480,13 +480,16 @@ class Scene(Strict):
 
     def input_files(self) -> set[Path]:
         """Every file the scene reads — mesh and height-field files, textures, light masks, environment maps,
-        measured BRDFs, orientation fields: each a ``Path`` field; a .gltf file's buffers and images —, resolved.
+        measured BRDFs, orientation fields: each a ``Path`` field; scratch profiles (``file:PATH``); a .gltf file's
+        buffers and images —, resolved.
         An output must not replace one."""
         found: set[Path] = set()
 
         def walk(value) -> None:
             if isinstance(value, Path):
                 found.add(self.resolve(value).resolve())
+            elif isinstance(value, str) and value.startswith("file:"):  # a scratch profile read from a file
+                found.add(self.resolve(Path(value[5:])).resolve())
             elif isinstance(value, dict):
                 for item in value.values():
                     walk(item)

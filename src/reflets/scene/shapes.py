@@ -24,7 +24,7 @@ import numpy as np
 
 from reflets.errors import ARRAY_READ_ERRORS, SceneError
 from reflets.quantities import MAX_MAGNITUDE
-from reflets.scene.meshdata import MeshData
+from reflets.scene.meshdata import MeshData, merged
 
 from .surfaces import BezierPatch, HeightField
 
@@ -103,18 +103,6 @@ def _mesh(pos, nrm, tan, w, uv, idx) -> MeshData:
         tangents=np.concatenate([_unit(tan[used]), w[used]], axis=1).astype(np.float32),
         uvs=uv[used].astype(np.float32),
         indices=remap.reshape(-1, 3).astype(np.uint32),
-    )
-
-
-def _merge(*parts: MeshData) -> MeshData:
-    """Concatenate meshes, offsetting indices."""
-    offsets = np.cumsum([0] + [p.n_vertices for p in parts[:-1]])
-    return MeshData(
-        positions=np.concatenate([p.positions for p in parts]),
-        normals=np.concatenate([p.normals for p in parts]),
-        tangents=np.concatenate([p.tangents for p in parts]),
-        uvs=np.concatenate([p.uvs for p in parts]),
-        indices=np.concatenate([p.indices + np.uint32(o) for p, o in zip(parts, offsets, strict=True)]),
     )
 
 
@@ -259,7 +247,7 @@ def cylinder(radius: float = 1.0, height: float = 2.0, segments: int = 128, caps
         fan = np.stack([np.zeros(n, int), k, nxt] if sign > 0 else [np.zeros(n, int), nxt, k], axis=1)
         ones = np.ones((n + 1, 1))
         discs.append(_mesh(cpos, ones * [0, sign, 0], ones * [1, 0, 0], 1.0, cuv, fan))
-    return _merge(side, *discs)
+    return merged([side, *discs])
 
 
 def torus(major: float = 1.0, minor: float = 0.25, segments: tuple[int, int] = DEFAULT_SEGMENTS) -> MeshData:

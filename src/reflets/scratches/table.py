@@ -92,13 +92,19 @@ class ScratchTable:
 
     # -- I/O ------------------------------------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
+        import io
+
+        from ..outputs import atomic_write
+
         path = Path(path)
-        if path.suffix != ".npz":
+        if path.suffix.lower() != ".npz":
             raise OutputError("a scratch table is written as .npz", file=path)
         if not path.parent.exists():
             raise OutputError("output directory does not exist", file=path)
         arrays = {k: getattr(self, k) for k in _ARRAYS}
-        np.savez_compressed(path, **arrays, meta=np.array(json.dumps(self.meta)))
+        with io.BytesIO() as buffer:
+            np.savez_compressed(buffer, **arrays, meta=np.array(json.dumps(self.meta)))
+            atomic_write(path, buffer.getvalue())
         return path
 
 
@@ -374,6 +380,12 @@ def plot_table(table: ScratchTable, path: str | Path) -> Path:
         a.set_xlabel("φ_in (deg)")
         a.set_ylabel("φ_out (deg)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    import io
+
+    from ..outputs import atomic_write
+
+    with io.BytesIO() as buffer:
+        fig.savefig(buffer, dpi=110, format="png")
+        atomic_write(Path(path), buffer.getvalue())
     plt.close(fig)
     return path

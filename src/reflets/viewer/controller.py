@@ -28,7 +28,8 @@ An event is a dict with a ``type`` (JSON-able: a script replays a list of them, 
 
 Every event is checked before it is applied (viewer/events.py: a model per type, with the fields' types and
 ranges; the scene's indices and names): an unknown event or field, or a value out of range, is an
-:class:`ArgumentError` naming it, and changes nothing.
+:class:`ArgumentError` naming it, and changes nothing (one the renderer refuses as it applies it leaves the camera
+as it was).
 """
 
 from __future__ import annotations
@@ -36,11 +37,12 @@ from __future__ import annotations
 import math
 import statistics
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import ArgumentError, RefletsError
+from ..errors import ArgumentError, RefletsError, RefletsWarning
 from ..imageio import tonemap
 from ..metrics import relmse
 from .camera import OrbitCamera
@@ -146,7 +148,10 @@ class ViewerController(Painting):
         read back until ``image`` is asked for. A progressive method accumulates while nothing changes."""
         if self._pending_stroke is not None:
             stroke, self._pending_stroke = self._pending_stroke, None
-            self._on_stroke(**stroke)
+            try:
+                self._on_stroke(**stroke)
+            except RefletsError as exc:  # a drag the brush cannot take (along the normal, off the mesh): skipped
+                warnings.warn(f"the paint stroke is skipped: {exc.message}", RefletsWarning, stacklevel=2)
         t = time.perf_counter()
         self.texture = self.renderer.render_texture()
         self._image = None
@@ -200,7 +205,8 @@ class ViewerController(Painting):
     # ------------------------------------------------------------------ events
     def handle(self, event: dict) -> None:
         """Apply one event (see the module docstring), checked first (viewer/events.py: the models a script is
-        loaded with, and the scene's indices and names); a refused event leaves the view as it was."""
+        loaded with, and the scene's indices and names): refused there, it changes nothing; refused as it applies, the
+        camera is left as it was."""
         import dataclasses
 
         from .events import check_in_scene, parse_event
@@ -451,6 +457,7 @@ class ViewerController(Painting):
     def save_scene(self, path: str | Path, overwrite: bool = False) -> Path:
         """The current scene, edits and camera included, as TOML (an existing file is not replaced unless
         ``overwrite``)."""
+        from ..outputs import atomic_write, check_output
         from ..scene import load_dict, save_scene
 
         scene, path = self.scene, Path(path)
@@ -459,10 +466,9 @@ class ViewerController(Painting):
             for name, material in scene.materials.items():
                 field = getattr(material, "orientation", None)
                 if field is not None and Path(field).parent == self._fields_dir:
-                    copy = path.with_name(f"{path.stem}.{name}.npz")
-                    if copy.exists() and not overwrite:
-                        raise ArgumentError("exists already; choose another name (nothing was written)", file=copy)
-                    copy.write_bytes(Path(field).read_bytes())
+                    copy = check_output(path.with_name(f"{path.stem}.{name}.npz"), (".npz",),
+                                        inputs=self.scene.input_files(), overwrite=overwrite)  # fmt: skip
+                    atomic_write(copy, Path(field).read_bytes())
                     material = material.model_copy(update={"orientation": copy.resolve()})
                 materials[name] = material
             data = scene.model_dump(exclude={"base_dir"}, exclude_none=True)
@@ -473,10 +479,9 @@ class ViewerController(Painting):
     def save_camera(self, path: str | Path, overwrite: bool = False) -> Path:
         """The current camera as JSON (the scene's ``[camera]`` fields)."""
         from .. import jsonio
+        from ..outputs import check_output
 
-        path = Path(path)
-        if path.exists() and not overwrite:
-            raise ArgumentError("exists already; choose another name (nothing was written)", file=path)
+        path = check_output(path, (".json",), inputs=self.scene.input_files(), overwrite=overwrite)
         return jsonio.write(path, self.scene.camera.model_dump(), indent=2)
 
     def release(self) -> None:

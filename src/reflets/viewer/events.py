@@ -16,7 +16,8 @@ from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Fie
 from ..arguments import MAX_SPP, validated
 from ..errors import ArgumentError
 from ..imageio import TONEMAP_MODES
-from ..quantities import Finite, Positive
+from ..quantities import JsonNumber as Number
+from ..quantities import Positive
 from .painting import PAINT_TOOLS
 
 #: the most frames one run draws (``--frames``, or a script's events and waits): 100,000 is half an hour at 60
@@ -32,7 +33,7 @@ MAX_DEGREES = 3600.0
 MAX_PIXELS = 1e6
 #: a zoom factor is in [1 / MAX_ZOOM, MAX_ZOOM]: the distance to the target changes by at most this in one event
 MAX_ZOOM = 1e4
-#: wheel notches in one event (×1.1 each: 100 notches zoom by 10⁴)
+#: wheel notches in one event (×1.1 each: 100 notches zoom by about 1.4 × 10⁴)
 MAX_NOTCHES = 100.0
 #: exposure in stops, either way: 2⁶⁴ is beyond any radiance a float32 frame holds
 MAX_STOPS = 64.0
@@ -85,7 +86,6 @@ def _nonzero(vector: tuple[float, float, float]) -> tuple[float, float, float]:
     return vector
 
 
-Number = Annotated[Finite, Strict()]
 Degrees = _bounded(-MAX_DEGREES, MAX_DEGREES)
 Pixels = _bounded(-MAX_PIXELS, MAX_PIXELS)
 #: [x, y, z] (a list in JSON; a tuple or an array from the API)

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from .controller import ViewerController
+from .events import MAX_NOTCHES
 
 try:
     from jupyter_rfb import RemoteFrameBuffer
@@ -45,7 +46,18 @@ class Viewer(RemoteFrameBuffer):
         return self.controller.snapshot()
 
     def handle_event(self, event: dict) -> None:
-        """A browser event (jupyter_rfb's) as a controller event; anything else is ignored."""
+        """A browser event (jupyter_rfb's) as a controller event; anything else is ignored, and one the controller
+        refuses (a drag that leaves the view, …) is a warning: the widget goes on."""
+        import warnings
+
+        from ..errors import RefletsError, RefletsWarning
+
+        try:
+            self._browser_event(event)
+        except RefletsError as exc:
+            warnings.warn(str(exc), RefletsWarning, stacklevel=2)
+
+    def _browser_event(self, event: dict) -> None:
         kind = event.get("type", "")
         shown = self._scale(event)
         if kind in ("pointer_down", "pointer_move", "pointer_up"):
@@ -57,7 +69,8 @@ class Viewer(RemoteFrameBuffer):
             self.handle({"type": "pointer", "action": kind[8:], **shown, "button": button,
                          "shift": "Shift" in event.get("modifiers", ())})  # fmt: skip
         elif kind == "wheel":
-            self.handle({"type": "wheel", "dy": -float(event.get("dy", 0.0)) / WHEEL_PIXELS})
+            notches = -float(event.get("dy", 0.0)) / WHEEL_PIXELS
+            self.handle({"type": "wheel", "dy": max(-MAX_NOTCHES, min(MAX_NOTCHES, notches))})
         elif kind == "key_down":
             self.handle({"type": "key", "key": str(event.get("key", "")).replace("Arrow", "").lower()})
 

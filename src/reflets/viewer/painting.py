@@ -94,7 +94,8 @@ class Painting:
         sx, sy = pointer["start"]
         right, up, _ = self.camera.basis()
         direction = (x - sx) * right - (y - sy) * up
-        self._pending_stroke = {"centre": list(pointer["surface"]), "stroke": direction.tolist()}
+        if np.any(direction):  # a drag back to its start is no stroke
+            self._pending_stroke = {"centre": list(pointer["surface"]), "stroke": direction.tolist()}
 
     def _apply_field(self) -> None:
         import tempfile
@@ -160,10 +161,14 @@ class Painting:
 
     def save_field(self, path: str | Path, overwrite: bool = False) -> Path:
         """The painted mesh's orientation field (.npz, u), for a material's ``orientation``."""
-        path = Path(path)
+        import io
+
+        from ..outputs import atomic_write, check_output
+
         if self._paint is None:
             raise ArgumentError("no mesh is being painted", field="save_field")
-        if path.exists() and not overwrite:
-            raise ArgumentError("exists already; choose another name (nothing was written)", file=path)
-        np.savez(path, u=self._paint.field().astype(np.float32))
+        path = check_output(path, (".npz",), inputs=self.scene.input_files(), overwrite=overwrite)
+        with io.BytesIO() as buffer:
+            np.savez(buffer, u=self._paint.field().astype(np.float32))
+            atomic_write(path, buffer.getvalue())
         return path

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError, GLUnavailableError, RefletsError
-from .events import MAX_FRAMES, Script, ScriptEvents, as_script, check_frames, check_script  # noqa: F401  (the CLI's)
+from .events import Script, ScriptEvents, as_script, check_frames, check_script
 from .panels import METHODS  # what m cycles through: the panel's list
 
 
