@@ -310,3 +310,12 @@ def test_bench_gpu_s_subprocess_refuses_a_job_it_cannot_read(capsys, job):
     assert main(job) == 2
     err = capsys.readouterr().err
     assert err.startswith("reflets.bench.gpu: ") and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("argv", [["edit-highlights", "s.toml", "--mesh", "0", "--iterations", "1e9", "-o", "a.npz"],
+                                  ["ar", "bord"], [], ["render", "s.toml", "--spp", "many"]])  # fmt: skip
+def test_argparse_errors_are_one_line_too(capsys, argv):
+    with pytest.raises(SystemExit) as caught:
+        main(argv)
+    err = capsys.readouterr().err
+    assert caught.value.code == 2 and err.count("\n") == 1 and err.startswith("reflets: error: "), err

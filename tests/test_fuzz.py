@@ -152,8 +152,8 @@ def test_cli_arguments_end_in_one_line(tmp_path_factory, capsys, command, option
     capsys.readouterr()  # the fixture lives across examples: start each with empty streams
     try:
         rc = main(argv)
-    except SystemExit as exc:  # argparse's usage error: exit 2 with its usage text
-        assert exc.code == 2
+    except SystemExit as exc:  # argparse's own error (one line: reflets.cli._Parser), exit 2
+        assert exc.code == 2 and capsys.readouterr().err.count("\n") == 1
         return
     err = capsys.readouterr().err.strip()
     assert rc in (0, 2), (argv, rc, err)

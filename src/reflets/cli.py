@@ -601,8 +601,16 @@ def cmd_scratch_brdf(args) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's own errors (an unknown option, ``--iterations 1e9`` not a whole number) as one line, exit 2,
+    like every other error: the usage is what ``--help`` prints."""
+
+    def error(self, message: str):
+        self.exit(EXIT_USER_ERROR, f"reflets: error: {message} (see: {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="reflets", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="reflets", description=__doc__.splitlines()[0])
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
