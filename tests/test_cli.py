@@ -319,3 +319,14 @@ def test_argparse_errors_are_one_line_too(capsys, argv):
         main(argv)
     err = capsys.readouterr().err
     assert caught.value.code == 2 and err.count("\n") == 1 and err.startswith("reflets: error: "), err
+
+
+@pytest.mark.parametrize(("variable", "value"), [("REFLETS_CACHE_MB", "nan"), ("REFLETS_CACHE_MB", "-1"),
+                                                 ("REFLETS_MEMORY_LIMIT", "1e300x")])  # fmt: skip
+def test_a_bad_environment_variable_is_one_line_before_any_work(capsys, monkeypatch, tmp_path, variable, value):
+    """Checked as the command starts: not after the scene's warnings, at its first use deep in a render."""
+    monkeypatch.setenv(variable, value)
+    out = tmp_path / "x.png"
+    assert main(["render", str(tmp_path / "missing.toml"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and variable in err and not out.exists(), err

@@ -864,11 +864,25 @@ def _one_line_warnings() -> None:
     warnings.showwarning = show
 
 
+def _check_environment() -> None:
+    """The environment variables reflets reads, checked as a command starts — a bad one is one line before any
+    work or warning, not an error at its first use deep in a render."""
+    import os
+
+    from .cache import cache_budget
+    from .resources import ENV_VAR, parse_bytes
+
+    cache_budget()
+    if os.environ.get(ENV_VAR, "").strip():
+        parse_bytes(os.environ[ENV_VAR])
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     _one_line_warnings()
     try:
+        _check_environment()
         return args.func(args)
     except RefletsError as exc:
         if args.debug:
