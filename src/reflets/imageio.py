@@ -49,8 +49,8 @@ PNG_BIT_DEPTHS: tuple[int, ...] = (8, 16)
 #: EXR 16.0, NPY 3.8), rounded up: what reflets.resources checks before a render it will write
 WRITE_BYTES_PER_PIXEL: dict[str, int] = {".png": 112, ".hdr": 90, ".exr": 16, ".npy": 4}
 
-# Exposure is a number of stops; beyond this range 2**exposure over/underflows float32 for any sensible image.
-_MAX_EXPOSURE = 64.0
+#: exposure in stops, either way: beyond it 2**exposure over/underflows float32 for any sensible image
+MAX_EXPOSURE = 64.0
 # Radiance's own writer stores colours below this as (0, 0, 0, 0); it also keeps the exponent byte far from
 # the values that would make a flat scanline look like a run-length-encoded one.
 _RGBE_MIN = 1e-32
@@ -128,9 +128,9 @@ def _check_exposure(exposure: float, file: str | Path | None = None) -> float:
         stops = float(exposure)
     except (TypeError, ValueError):
         stops = math.nan
-    if not math.isfinite(stops) or abs(stops) > _MAX_EXPOSURE:
+    if not math.isfinite(stops) or abs(stops) > MAX_EXPOSURE:
         raise ArgumentError(
-            f"exposure must be a finite number of stops in [-{_MAX_EXPOSURE:g}, {_MAX_EXPOSURE:g}], got {exposure!r}",
+            f"exposure must be a finite number of stops in [-{MAX_EXPOSURE:g}, {MAX_EXPOSURE:g}], got {exposure!r}",
             file=file,
             field="exposure",
         )

@@ -241,8 +241,8 @@ def as_reference_worker() -> None:
       ``MALLOC_TRIM_THRESHOLD_=65536``, which also turns off glibc's growing mmap threshold, so every array of a
       tile came from a fresh mmap and its pages were faulted in again. Arrays under 32 MB come from the heap
       again, kept.
-    (`reflets bench reference-scale` before both: an area-light reference 1.20× faster in 2 processes, 0.86× on
-    a 2-worker Dask cluster; docs/reference-scale.md.)"""
+    (`reflets bench reference-scale` before both: far smaller speed-ups in 2 processes, a slowdown on a 2-worker
+    Dask cluster; docs/reference-scale.md.)"""
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1)

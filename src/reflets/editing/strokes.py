@@ -109,7 +109,10 @@ class EditSession:
     def stroke(self, tool: str, centre, radius: float, direction) -> tuple[float, float]:
         """Apply one stroke (a warp solved for, or the stencil); its tensor energy at the start and the end (zero
         for the stencil, which sets the field directly). A bad stroke is one ArgumentError (:meth:`brush`)."""
-        tool, brush = self.brush(tool, centre, radius, direction)
+        return self.apply_brush(*self.brush(tool, centre, radius, direction))
+
+    def apply_brush(self, tool: str, brush: Brush) -> tuple[float, float]:
+        """:meth:`stroke` with the brush :meth:`brush` placed (a scripted session places them all first)."""
         if tool == "stencil":
             phi, energies = stencil(self.mesh, self.phi, self.h, brush), (0.0, 0.0)
         else:
@@ -155,11 +158,16 @@ def apply_strokes(
     A stroke the mesh refuses (its brush off the surface, its stroke along the normal) is named by its place in
     the list and the ``file`` it came from."""
     session = EditSession(scene, index, light, k, iterations)
-    for step in (session.brush, session.stroke):  # every brush placed before the first solve
-        for place, stroke in enumerate(strokes):
-            try:
-                step(stroke["tool"], stroke["centre"], stroke["radius"], stroke["stroke"])
-            except ArgumentError as exc:
-                field = "--strokes" if file else "strokes"
-                raise ArgumentError(f"strokes[{place}]: {exc.message}", file=file, field=field) from None
+
+    def named(place: int, step, *args):
+        try:
+            return step(*args)
+        except ArgumentError as exc:
+            field = "--strokes" if file else "strokes"
+            raise ArgumentError(f"strokes[{place}]: {exc.message}", file=file, field=field) from None
+
+    brushes = [named(place, session.brush, s["tool"], s["centre"], s["radius"], s["stroke"])
+               for place, s in enumerate(strokes)]  # every brush placed before the first solve  # fmt: skip
+    for place, (tool, brush) in enumerate(brushes):
+        named(place, session.apply_brush, tool, brush)
     return {"u": session.field(), "energy": np.asarray(session.energies).reshape(-1, 2)}

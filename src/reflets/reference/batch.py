@@ -44,7 +44,7 @@ def plan(sources: list[str], output: str | None, load: Callable, *, engine: str,
     """The references to make, every argument checked (module docstring); ``params`` the reference's
     parameters that make its content key (spp, seed, size, ...); ``overwrite``: one scene's output replaces the
     image there, a batch the images its index does not vouch for (both refused otherwise)."""
-    from ..outputs import check_not_input, check_output_path
+    from ..outputs import check_not_input, check_output, check_output_path
 
     folder = Path(output) if output else None
     batch = len(sources) > 1 or (folder is not None and folder.is_dir())
@@ -86,11 +86,10 @@ def plan(sources: list[str], output: str | None, load: Callable, *, engine: str,
     for item in planned:  # no output replaces a file that any of the scenes reads
         for path in (item.out, item.stderr):
             check_not_input(path, inputs)
-    if not batch and not overwrite:  # one scene's output: the rule of every command (reflets.outputs)
+    if not batch:  # one scene's output: the rule of every command (reflets.outputs)
         item = planned[0]
         for path in (item.out, item.stderr) if engine != "mitsuba" else (item.out,):  # Mitsuba: no error image
-            if path.exists():
-                raise OutputError("exists already; give --overwrite to replace it (nothing was written)", file=path)
+            check_output(path, (".exr", ".npy"), overwrite=overwrite)
     return planned
 
 

@@ -6,9 +6,9 @@ reference's tasks (reflets.reference.parallel) go to the workers; nothing is ass
 but the scheduler's address:
 
 - **the scene travels by content**: its description, and every file it reads (meshes, textures, maps, measured
-  BRDFs) keyed by SHA-256. Each worker keeps the files it was sent (``cache_dir("cluster")``) and is sent only the
-  ones it lacks, then lays them out as on this machine (relative references inside a glTF hold) under a folder
-  named by the scene's content key;
+  BRDFs) keyed by SHA-256, put on the cluster once per run and sent to each worker that runs a task (its
+  dependency). A worker keeps on its disk the files it lacked (``cache_dir("cluster")``), then lays them out as
+  on this machine (relative references inside a glTF hold) under a folder named by the scene's content key;
 - **versions are checked first**: every worker runs the same reflets, NumPy, Python (major.minor) and Dask as this
   process (the random streams and the sums bit for bit), or the run stops before any task, in one line;
 - **a lost worker's tasks run again** elsewhere (Dask reschedules the tasks of a worker that dies); each task draws

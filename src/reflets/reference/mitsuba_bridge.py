@@ -463,8 +463,7 @@ def to_mitsuba_dict(
     width, height = _check_size(size or scene.camera.size)
     if not (isinstance(spp, int | np.integer) and 1 <= spp <= 1 << 20):
         raise ArgumentError(f"spp must be an integer in [1, {1 << 20}], got {spp!r}")
-    if not (isinstance(seed, int | np.integer) and 0 <= seed < 1 << 32):
-        raise ArgumentError(f"seed must be an integer in [0, 2^32), got {seed!r}")
+    _check_seed(seed)
     if pixel_filter not in PIXEL_FILTERS:
         raise ArgumentError(f"pixel_filter must be one of {', '.join(PIXEL_FILTERS)}, got {pixel_filter!r}")
     if background not in ("emitter", "alpha", "none"):
@@ -568,6 +567,12 @@ def to_mitsuba_dict(
     return out
 
 
+def _check_seed(seed) -> None:
+    """Mitsuba's seeds are 32-bit unsigned integers."""
+    if not (isinstance(seed, int | np.integer) and 0 <= seed < 1 << 32):
+        raise ArgumentError(f"seed must be an integer in [0, 2^32), got {seed!r}")
+
+
 def _check_size(size) -> tuple[int, int]:
     try:
         width, height = (int(v) for v in size)
@@ -631,8 +636,7 @@ def render_mitsuba(scene: Scene, spp: int = 64, seed: int = 0, size: tuple[int, 
     from .parallel import default_cluster, places
 
     width, height = _check_size(size or scene.camera.size)
-    if not (isinstance(seed, int | np.integer) and 0 <= seed < 1 << 32):
-        raise ArgumentError(f"seed must be an integer in [0, 2^32), got {seed!r}")
+    _check_seed(seed)
     tasks = mitsuba_tiles(width, height, seed)
     image = np.zeros((height, width, 3), np.float32)
     cluster = default_cluster() if cluster is None else cluster  # `reflets bench --cluster`: its references there

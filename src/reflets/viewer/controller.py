@@ -448,11 +448,9 @@ class ViewerController(Painting):
     # ------------------------------------------------------------------ saving
     def save_screenshot(self, path: str | Path) -> Path:
         """The view as shown: PNG (tone mapped as shown) or EXR / NPY / HDR (linear)."""
-        from ..imageio import IMAGE_WRITE_EXTENSIONS, check_output_path, write_image
+        from ..imageio import write_image
 
-        path = Path(path)
-        check_output_path(path, IMAGE_WRITE_EXTENSIONS)
-        return write_image(path, self.shown(), exposure=self.exposure, tonemap=self.tonemap_mode)
+        return write_image(Path(path), self.shown(), exposure=self.exposure, tonemap=self.tonemap_mode)
 
     def save_scene(self, path: str | Path, overwrite: bool = False) -> Path:
         """The current scene, edits and camera included, as TOML (an existing file is not replaced unless

@@ -15,7 +15,7 @@ from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Fie
 
 from ..arguments import MAX_SPP, validated
 from ..errors import ArgumentError
-from ..imageio import TONEMAP_MODES
+from ..imageio import MAX_EXPOSURE, TONEMAP_MODES
 from ..quantities import JsonNumber as Number
 from ..quantities import Positive
 from .painting import PAINT_TOOLS
@@ -35,8 +35,6 @@ MAX_PIXELS = 1e6
 MAX_ZOOM = 1e4
 #: wheel notches in one event (×1.1 each: 100 notches zoom by about 1.4 × 10⁴)
 MAX_NOTCHES = 100.0
-#: exposure in stops, either way: 2⁶⁴ is beyond any radiance a float32 frame holds
-MAX_STOPS = 64.0
 #: a key's name (the notebook reports the browser's: "ArrowLeft", "Shift", …; keys the viewer has no use for do
 #: nothing)
 MAX_KEY_CHARS = 32
@@ -230,7 +228,7 @@ class Shadows(_Event):
 
 class Exposure(_Event):
     type: Literal["exposure"]
-    stops: _bounded(-MAX_STOPS, MAX_STOPS)
+    stops: _bounded(-MAX_EXPOSURE, MAX_EXPOSURE)
 
 
 class Tonemap(_Event):
@@ -349,7 +347,10 @@ def parse_event(event) -> _Event:
 
 
 def as_script(events) -> Script:
-    """A list of event dicts (an API caller's, or a loaded :class:`Script`: its file named), every event checked."""
+    """A list of event dicts (an API caller's) checked, every event; a loaded :class:`Script` (checked as it was
+    read: :func:`reflets.viewer.window.load_script`) as it is."""
+    if isinstance(events, Script):
+        return events
     script = Script(file=getattr(events, "file", None))
     script.extend(validated(ScriptEvents, events, file=script.file, field=script.field).dicts())
     return script

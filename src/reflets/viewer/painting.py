@@ -25,8 +25,6 @@ class Painting:
         if tool is None:
             self.paint_tool = None
             return
-        if tool not in PAINT_TOOLS:
-            raise ArgumentError(f"paint tool {tool!r}; allowed: {', '.join(PAINT_TOOLS)}", field="event.paint.tool")
         index = self._selected("mesh", None)
         name = self.scene.mesh[index].material
         if "orientation" not in type(self.scene.materials[name]).model_fields:
